@@ -1,0 +1,56 @@
+#include "engine/particles.hpp"
+
+#include "kernels/sort.hpp"
+
+namespace smpm {
+
+namespace {
+template <class F>
+void for_each_double(Particles& P, F&& f) {
+  for (auto* v : {&P.x, &P.y, &P.vx, &P.vy, &P.m, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Lxx, &P.Lxy,
+                  &P.Lyx, &P.Lyy})
+    f(*v);
+}
+}  // namespace
+
+void Particles::resize(std::size_t n) {
+  for_each_double(*this, [n](std::vector<double>& v) { v.resize(n, 0.0); });
+  id.resize(n, 0);
+  body.resize(n, 0);
+}
+
+kern::ParticleView Particles::view() {
+  return {x.data(),   y.data(),   vx.data(),  vy.data(),  m.data(),   V.data(),   sxx.data(),
+          syy.data(), sxy.data(), p.data(),   Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data()};
+}
+
+void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su) {
+  const std::size_t n = size();
+  sd.resize(n);
+  su.resize(n);
+  for_each_double(*this, [&](std::vector<double>& v) {
+    kern::gather_permute(v.data(), order, n, sd.data());
+    v.swap(sd);
+  });
+  kern::gather_permute(id.data(), order, n, su.data());
+  id.swap(su);
+  std::vector<std::uint8_t> b(n);
+  kern::gather_permute(body.data(), order, n, b.data());
+  body.swap(b);
+}
+
+std::size_t Particles::bytes() const {
+  std::size_t b = 0;
+  for_each_double(const_cast<Particles&>(*this), [&](std::vector<double>& v) { b += v.capacity() * sizeof(double); });
+  return b + id.capacity() * sizeof(std::uint32_t) + body.capacity();
+}
+
+void Particles::append(const Particles& o) {
+  auto cat = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
+  cat(x, o.x); cat(y, o.y); cat(vx, o.vx); cat(vy, o.vy); cat(m, o.m); cat(V, o.V);
+  cat(sxx, o.sxx); cat(syy, o.syy); cat(sxy, o.sxy); cat(p, o.p);
+  cat(Lxx, o.Lxx); cat(Lxy, o.Lxy); cat(Lyx, o.Lyx); cat(Lyy, o.Lyy);
+  cat(id, o.id); cat(body, o.body);
+}
+
+}  // namespace smpm

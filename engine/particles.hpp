@@ -1,0 +1,36 @@
+// Particle state: structure of arrays, one contiguous array per field. A scene allocates only
+// the fields its models need (see Particles::Fields).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kernels/views.hpp"
+
+namespace smpm {
+
+struct Particles {
+  // Always present.
+  std::vector<double> x, y;       // position [m]
+  std::vector<double> vx, vy;     // velocity [m/s]
+  std::vector<double> m;          // mass per unit thickness [kg/m]
+  std::vector<double> V;          // current volume per unit thickness [m^2]
+  std::vector<double> sxx, syy, sxy;  // stress deviator [Pa] (s_zz = -(s_xx + s_yy))
+  std::vector<double> p;          // pressure [Pa], compression positive
+  std::vector<double> Lxx, Lxy, Lyx, Lyy;  // velocity gradient [1/s] (= APIC affine matrix)
+  std::vector<std::uint32_t> id;  // original index, permuted along with the rest
+  std::vector<std::uint8_t> body; // body index
+
+  std::size_t size() const { return x.size(); }
+  void resize(std::size_t n);
+  kern::ParticleView view();
+  // Physically reorders every array so that array order becomes `order` (sorted order).
+  void permute(const std::uint32_t* order, std::vector<double>& scratch_d,
+               std::vector<std::uint32_t>& scratch_u);
+  // Resident bytes of all particle arrays.
+  std::size_t bytes() const;
+  void append(const Particles& o);
+};
+
+}  // namespace smpm

@@ -1,0 +1,226 @@
+#include "engine/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "kernels/sort.hpp"
+#include "kernels/transfer.hpp"
+
+namespace smpm {
+
+namespace {
+
+// Scoped phase timer.
+struct Timed {
+  double& acc;
+  double t0 = omp_get_wtime();
+  explicit Timed(double& a) : acc(a) {}
+  ~Timed() { acc += omp_get_wtime() - t0; }
+};
+
+}  // namespace
+
+Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std::vector<Material> materials,
+                       std::vector<int> body_material, Particles particles)
+    : cfg_(cfg),
+      materials_(std::move(materials)),
+      body_material_(std::move(body_material)),
+      P_(std::move(particles)),
+      grid_(geom, cfg.transfer == Transfer::FLIP) {
+  if (geom.tile < 4) throw std::invalid_argument("grid tile width must be >= 4 cells");
+  const std::size_t n = P_.size();
+  key_.resize(n);
+  order_.resize(n);
+  cell_start_.resize(geom.num_keys() + 1);
+  hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
+  row_force_.assign(4 * static_cast<std::size_t>(geom.sy()), 0.0);
+  select_.resize(materials_.size());
+  for (auto& s : select_) s.fill(0);
+  for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
+  // first time step from the initial state
+  max_speed_ = 0.0;
+  auto pv = P_.view();
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
+    with_material(materials_[k], [&](const auto& eos, const auto& str) {
+      max_speed_ = std::max(max_speed_, kern::max_signal_speed(pv, n, eos, str, sel));
+    });
+  }
+}
+
+double Simulation::stable_dt() const {
+  if (cfg_.fixed_dt > 0.0) return cfg_.fixed_dt;
+  return cfg_.cfl * grid_.geom.h / max_speed_;
+}
+
+void Simulation::step(double dt_max) {
+  dt_ = std::min(stable_dt(), dt_max);
+  bin_particles();      // cell keys, counting sort by tile and cell
+  scatter_to_grid();    // P2G: mass, momentum, internal force (colored, atomic-free)
+  update_grid();        // momentum update with gravity, walls
+  gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap)
+  update_stress();      // volume, stress, pressure; signal speed for the next dt
+  time_ += dt_;
+  last_dt_ = dt_;
+  ++steps_;
+}
+
+void Simulation::bin_particles() {
+  Timed t(times_.sort);
+  const auto& g = grid_.geom;
+  const std::size_t n = P_.size();
+  const auto bad = kern::compute_keys(g, P_.x.data(), P_.y.data(), n, key_.data());
+  if (bad >= 0) {
+    throw StepError("particle left the grid: " + describe_particle(static_cast<std::size_t>(bad)) +
+                    "; the grid spans x in [" + std::to_string(g.x0) + ", " + std::to_string(g.x0 + g.length_x()) +
+                    "] m, y in [" + std::to_string(g.y0) + ", " + std::to_string(g.y0 + g.length_y()) +
+                    "] m: enlarge the grid or add a wall");
+  }
+  kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
+  if (cfg_.permute_every > 0 && steps_ % cfg_.permute_every == 0) {
+    P_.permute(order_.data(), scratch_d_, scratch_u_);
+    kern::gather_permute(key_.data(), order_.data(), n, scratch_u_.data());
+    key_.swap(scratch_u_);
+    for (std::size_t s = 0; s < n; ++s) order_[s] = static_cast<std::uint32_t>(s);
+  }
+}
+
+void Simulation::scatter_to_grid() {
+  Timed t(times_.p2g);
+  const auto& g = grid_.geom;
+  auto G = grid_.view();
+  auto pv = P_.view();
+  kern::clear_grid(g, G, true);
+  kern::with_shape(cfg_.shape, [&](auto shape) {
+    using S = decltype(shape);
+    if (cfg_.transfer == Transfer::APIC)
+      kern::p2g_colored<S, true, kern::P2GWhat::All>(g, G, pv, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
+    else
+      kern::p2g_colored<S, false, kern::P2GWhat::All>(g, G, pv, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
+  });
+  double* arrays[] = {G.m, G.px, G.py, G.fx, G.fy};
+  kern::fold_periodic(g, arrays, 5);
+}
+
+void Simulation::update_grid() {
+  Timed t(times_.grid);
+  const auto& g = grid_.geom;
+  auto G = grid_.view();
+  kern::GridUpdateParams q;
+  q.dt = dt_;
+  q.gravity_x = cfg_.gravity_x;
+  q.gravity_y = cfg_.gravity_y;
+  q.walls = cfg_.walls;
+  q.flip = cfg_.transfer == Transfer::FLIP;
+  q.mass_eps = 0.0;
+  kern::grid_update(g, G, q, row_force_.data());
+  double* arrays[] = {G.vx, G.vy, G.dvx, G.dvy};
+  kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
+  WallForces w;
+  for (int r = 0; r < g.sy(); ++r) {
+    w.left += row_force_[4 * r + 0];
+    w.right += row_force_[4 * r + 1];
+    w.bottom += row_force_[4 * r + 2];
+    w.top += row_force_[4 * r + 3];
+  }
+  wall_ = w;
+}
+
+void Simulation::gather_from_grid() {
+  Timed t(times_.g2p);
+  const auto& g = grid_.geom;
+  auto G = grid_.view();
+  auto pv = P_.view();
+  const std::size_t n = P_.size();
+  kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha};
+  const bool flip = cfg_.transfer == Transfer::FLIP;
+  kern::with_shape(cfg_.shape, [&](auto shape) {
+    using S = decltype(shape);
+    using kern::G2PWhat;
+    if (cfg_.scheme == Scheme::USL) {
+      if (flip) kern::g2p<S, true, G2PWhat::Full>(g, G, pv, n, q);
+      else kern::g2p<S, false, G2PWhat::Full>(g, G, pv, n, q);
+      return;
+    }
+    // MUSL: new particle velocities, remap their momentum to the grid, then move the
+    // particles and take the velocity gradient from the remapped grid velocity.
+    if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
+    else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
+    kern::clear_grid(g, G, false);
+    if (cfg_.transfer == Transfer::APIC)
+      kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
+    else
+      kern::p2g_colored<S, false, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
+    double* mom[] = {G.px, G.py};
+    kern::fold_periodic(g, mom, 2);
+    kern::GridUpdateParams gq;
+    gq.walls = cfg_.walls;
+    kern::grid_velocity_from_momentum(g, G, gq);
+    double* vel[] = {G.vx, G.vy};
+    kern::fill_periodic_ghosts(g, vel, 2);
+    kern::g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, n, q);
+  });
+}
+
+void Simulation::update_stress() {
+  Timed t(times_.constitutive);
+  auto pv = P_.view();
+  const std::size_t n = P_.size();
+  double vmax = 0.0;
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
+    const auto r = with_material(materials_[k], [&](const auto& eos, const auto& str) {
+      return kern::constitutive_update(pv, n, dt_, eos, str, sel);
+    });
+    check_volume(r.bad);
+    vmax = std::max(vmax, r.max_speed);
+  }
+  max_speed_ = vmax;
+}
+
+void Simulation::check_volume(std::ptrdiff_t bad) const {
+  if (bad < 0) return;
+  throw StepError("non-positive or NaN volume: " + describe_particle(static_cast<std::size_t>(bad)) +
+                  "; the velocity gradient over one step exceeded what the particle can take: "
+                  "lower cfl or refine the grid");
+}
+
+std::string Simulation::describe_particle(std::size_t p) const {
+  std::ostringstream s;
+  s.precision(9);
+  s << "particle " << P_.id[p] << " (body " << int(P_.body[p]) << ") at step " << steps_ << ", t = " << time_
+    << " s, position (" << P_.x[p] << ", " << P_.y[p] << ") m, velocity (" << P_.vx[p] << ", " << P_.vy[p]
+    << ") m/s, volume " << P_.V[p] << " m^2";
+  return s.str();
+}
+
+Simulation::Energy Simulation::energy() const {
+  Energy e;
+  for (std::size_t p = 0; p < P_.size(); ++p) {
+    e.kinetic += 0.5 * P_.m[p] * (P_.vx[p] * P_.vx[p] + P_.vy[p] * P_.vy[p]);
+    const Material& mat = materials_[body_material_[P_.body[p]]];
+    e.internal += P_.V[p] * mat.strain_energy_density(P_.sxx[p], P_.syy[p], P_.sxy[p], P_.p[p]);
+  }
+  return e;
+}
+
+std::array<double, 2> Simulation::momentum() const {
+  std::array<double, 2> q{0.0, 0.0};
+  for (std::size_t p = 0; p < P_.size(); ++p) {
+    q[0] += P_.m[p] * P_.vx[p];
+    q[1] += P_.m[p] * P_.vy[p];
+  }
+  return q;
+}
+
+std::size_t Simulation::bytes() const {
+  return P_.bytes() + grid_.bytes() +
+         (key_.capacity() + order_.capacity() + cell_start_.capacity() + hist_.capacity() + scratch_u_.capacity()) *
+             sizeof(std::uint32_t) +
+         scratch_d_.capacity() * sizeof(double);
+}
+
+}  // namespace smpm

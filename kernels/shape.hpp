@@ -1,0 +1,114 @@
+// Shape functions, evaluated per axis in grid units (xg = (x - x0) / h).
+// eval() returns the first node of the support and fills w[N] (weights) and dw[N]
+// (derivatives dN/dxg, i.e. gradients in grid units: divide by h for 1/m).
+// One templated P2G / G2P code path serves all of them (kernels/transfer.hpp).
+#pragma once
+#include <cmath>
+
+namespace smpm::kern {
+
+// Linear hat (classic MPM, Sulsky 1994). Support 2 nodes.
+struct Linear {
+  static constexpr int N = 2;
+  static constexpr const char* name = "linear";
+  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(xg);
+    const double f = xg - b;
+    w[0] = 1.0 - f;
+    w[1] = f;
+    dw[0] = -1.0;
+    dw[1] = 1.0;
+    return static_cast<int>(b);
+  }
+};
+
+// Undeformed GIMP (Bardenhagen & Kober 2004). lp = half particle width in grid units
+// (0 < lp <= 0.5). Support 1 + lp on each side: up to 3 nodes.
+struct UGIMP {
+  static constexpr int N = 3;
+  static constexpr const char* name = "ugimp";
+  static inline void one(double d, double lp, double& w, double& dw) {
+    const double a = std::fabs(d);
+    const double s = d < 0.0 ? -1.0 : 1.0;
+    if (a <= lp) {
+      w = 1.0 - (d * d + lp * lp) / (2.0 * lp);
+      dw = -d / lp;
+    } else if (a <= 1.0 - lp) {
+      w = 1.0 - a;
+      dw = -s;
+    } else if (a < 1.0 + lp) {
+      const double q = 1.0 + lp - a;
+      w = q * q / (4.0 * lp);
+      dw = -s * q / (2.0 * lp);
+    } else {
+      w = 0.0;
+      dw = 0.0;
+    }
+  }
+  static inline int eval(double xg, double lp, double* w, double* dw) {
+    const int b = static_cast<int>(std::floor(xg - lp));
+    for (int a = 0; a < N; ++a) {
+      // d = xg - x_node; dN/dxg = dS/dd.
+      one(xg - (b + a), lp, w[a], dw[a]);
+    }
+    return b;
+  }
+};
+
+// Quadratic B-spline. Support 3 nodes.
+struct QuadraticBSpline {
+  static constexpr int N = 3;
+  static constexpr const char* name = "quadratic";
+  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(xg - 0.5);
+    const double f = xg - b;  // in [0.5, 1.5)
+    const double a0 = 1.5 - f, a1 = f - 1.0, a2 = f - 0.5;
+    w[0] = 0.5 * a0 * a0;
+    w[1] = 0.75 - a1 * a1;
+    w[2] = 0.5 * a2 * a2;
+    dw[0] = -a0;
+    dw[1] = -2.0 * a1;
+    dw[2] = a2;
+    return static_cast<int>(b);
+  }
+};
+
+// Cubic B-spline. Support 4 nodes.
+struct CubicBSpline {
+  static constexpr int N = 4;
+  static constexpr const char* name = "cubic";
+  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(xg) - 1.0;
+    const double f = xg - b;  // in [1, 2)
+    const double d1 = f - 1.0;  // in [0, 1)
+    const double d2 = 2.0 - f;  // |d| for node 2, in (0, 1]
+    const double q0 = 2.0 - f;  // 2 - |d0|
+    const double q3 = f - 1.0;  // 2 - |d3|
+    w[0] = q0 * q0 * q0 / 6.0;
+    w[1] = 2.0 / 3.0 - d1 * d1 + 0.5 * d1 * d1 * d1;
+    w[2] = 2.0 / 3.0 - d2 * d2 + 0.5 * d2 * d2 * d2;
+    w[3] = q3 * q3 * q3 / 6.0;
+    dw[0] = -0.5 * q0 * q0;
+    dw[1] = -2.0 * d1 + 1.5 * d1 * d1;
+    dw[2] = 2.0 * d2 - 1.5 * d2 * d2;
+    dw[3] = 0.5 * q3 * q3;
+    return static_cast<int>(b);
+  }
+};
+
+enum class ShapeKind { Linear, UGIMP, Quadratic, Cubic };
+
+// Calls f(Shape{}) with the shape type selected at run time: the one dispatch point
+// from a run-time choice to the templated kernels.
+template <class F>
+decltype(auto) with_shape(ShapeKind k, F&& f) {
+  switch (k) {
+    case ShapeKind::Linear: return f(Linear{});
+    case ShapeKind::UGIMP: return f(UGIMP{});
+    case ShapeKind::Quadratic: return f(QuadraticBSpline{});
+    case ShapeKind::Cubic: break;
+  }
+  return f(CubicBSpline{});
+}
+
+}  // namespace smpm::kern

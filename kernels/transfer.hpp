@@ -1,0 +1,183 @@
+// Particle-to-grid scatter and grid-to-particle gather: one templated body per direction,
+// serving every shape function, both transfers (APIC, FLIP/PIC) and both schemes (USL, MUSL).
+// Race handling lives in the iteration (colored tiles, serial, or atomic adds for comparison),
+// never in the particle body.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "views.hpp"
+
+namespace smpm::kern {
+
+enum class P2GWhat { All, Momentum };  // All: mass, momentum, internal force. Momentum: MUSL remap.
+enum class G2PWhat { Full, Velocity, PositionGradient };  // Full: USL. MUSL: Velocity, then the rest.
+
+struct PlainAdd {
+  static inline void add(double& a, double v) { a += v; }
+};
+struct AtomicAdd {
+  static inline void add(double& a, double v) {
+#pragma omp atomic
+    a += v;
+  }
+};
+
+// Scatter of one particle p. APIC adds the affine momentum m C (x_i - x_p) with C = L
+// (for linear, quadratic and cubic splines B D^-1 equals sum_i v_i grad w_i^T exactly).
+template <class Shape, bool APIC, P2GWhat What, class Add = PlainAdd>
+inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::uint32_t p,
+                         double lp) {
+  constexpr int N = Shape::N;
+  const double inv_h = 1.0 / g.h;
+  const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
+  double wx[N], wy[N], dwx[N], dwy[N];
+  const int bx = Shape::eval(xg, lp, wx, dwx);
+  const int by = Shape::eval(yg, lp, wy, dwy);
+  const double m = P.m[p];
+  const double mvx = m * P.vx[p], mvy = m * P.vy[p];
+  double mCxx = 0, mCxy = 0, mCyx = 0, mCyy = 0;
+  if constexpr (APIC) {  // grid-unit offsets: fold h in here
+    mCxx = m * P.Lxx[p] * g.h; mCxy = m * P.Lxy[p] * g.h;
+    mCyx = m * P.Lyx[p] * g.h; mCyy = m * P.Lyy[p] * g.h;
+  }
+  double vsxx = 0, vsyy = 0, vsxy = 0;  // -V sigma / h
+  if constexpr (What == P2GWhat::All) {
+    const double Vh = P.V[p] * inv_h;
+    vsxx = -Vh * (P.sxx[p] - P.p[p]);
+    vsyy = -Vh * (P.syy[p] - P.p[p]);
+    vsxy = -Vh * P.sxy[p];
+  }
+  for (int b = 0; b < N; ++b) {
+    const std::size_t row = g.node(bx, by + b);
+    const double dy = (by + b) - yg;
+    for (int a = 0; a < N; ++a) {
+      const std::size_t n = row + a;
+      const double w = wx[a] * wy[b];
+      double qx = mvx, qy = mvy;
+      if constexpr (APIC) {
+        const double dx = (bx + a) - xg;
+        qx += mCxx * dx + mCxy * dy;
+        qy += mCyx * dx + mCyy * dy;
+      }
+      Add::add(G.px[n], w * qx);
+      Add::add(G.py[n], w * qy);
+      if constexpr (What == P2GWhat::All) {
+        const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
+        Add::add(G.m[n], w * m);
+        Add::add(G.fx[n], vsxx * gx + vsxy * gy);
+        Add::add(G.fy[n], vsxy * gx + vsyy * gy);
+      }
+    }
+  }
+}
+
+// Scatter of the particles at sorted positions [s0, s1).
+template <class Shape, bool APIC, P2GWhat What, class Add = PlainAdd>
+inline void p2g_range(const GridGeom& g, const GridView& G, const ParticleView& P,
+                      const std::uint32_t* order, std::size_t s0, std::size_t s1, double lp) {
+  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What, Add>(g, G, P, order[s], lp);
+}
+
+// Colored scatter: tiles of one color (tile parity in x and y) touch disjoint nodes
+// (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
+// one after another. Fixed tile order and fixed particle order within a tile make every
+// node's sum independent of the thread count.
+template <class Shape, bool APIC, P2GWhat What>
+void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
+                 const std::uint32_t* cell_start, double lp) {
+  const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
+#pragma omp parallel
+  for (int color = 0; color < 4; ++color) {
+    const int cx = color & 1, cy = color >> 1;
+    const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
+#pragma omp for schedule(dynamic, 1)
+    for (int k = 0; k < ntx * nty; ++k) {
+      const int tx = cx + 2 * (k % ntx), ty = cy + 2 * (k / ntx);
+      const std::size_t t = static_cast<std::size_t>(ty) * TX + tx;
+      p2g_range<Shape, APIC, What>(g, G, P, order, cell_start[t * cpt], cell_start[(t + 1) * cpt], lp);
+    }
+  }
+}
+
+// Reference scatters for tests and benchmarks.
+template <class Shape, bool APIC, P2GWhat What>
+void p2g_serial(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
+                std::size_t n, double lp) {
+  p2g_range<Shape, APIC, What>(g, G, P, order, 0, n, lp);
+}
+template <class Shape, bool APIC, P2GWhat What>
+void p2g_atomic(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
+                std::size_t n, double lp) {
+#pragma omp parallel for schedule(static)
+  for (std::size_t s = 0; s < n; ++s) p2g_particle<Shape, APIC, What, AtomicAdd>(g, G, P, order[s], lp);
+}
+
+struct G2PParams {
+  double dt = 0.0;
+  double lp = 0.25;          // uGIMP half particle width, grid units
+  double flip_alpha = 0.0;   // FLIP fraction (FLIP transfers only)
+};
+
+// Gather for one particle. Velocity: PIC (APIC) or the FLIP/PIC blend. Position: moved with
+// the grid velocity. Gradient: L = sum_i v_i grad w_i^T (also the APIC affine matrix).
+template <class Shape, bool FLIP, G2PWhat What>
+inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
+                         const G2PParams& q) {
+  constexpr int N = Shape::N;
+  const double inv_h = 1.0 / g.h;
+  const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
+  double wx[N], wy[N], dwx[N], dwy[N];
+  const int bx = Shape::eval(xg, q.lp, wx, dwx);
+  const int by = Shape::eval(yg, q.lp, wy, dwy);
+  double vx = 0, vy = 0, dvx = 0, dvy = 0, lxx = 0, lxy = 0, lyx = 0, lyy = 0;
+  for (int b = 0; b < N; ++b) {
+    const std::size_t row = g.node(bx, by + b);
+    for (int a = 0; a < N; ++a) {
+      const std::size_t n = row + a;
+      const double w = wx[a] * wy[b];
+      const double gvx = G.vx[n], gvy = G.vy[n];
+      vx += w * gvx;
+      vy += w * gvy;
+      if constexpr (FLIP && What != G2PWhat::PositionGradient) {
+        dvx += w * G.dvx[n];
+        dvy += w * G.dvy[n];
+      }
+      if constexpr (What != G2PWhat::Velocity) {
+        const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
+        lxx += gvx * gx; lxy += gvx * gy;
+        lyx += gvy * gx; lyy += gvy * gy;
+      }
+    }
+  }
+  if constexpr (What != G2PWhat::PositionGradient) {
+    if constexpr (FLIP) {
+      P.vx[p] = q.flip_alpha * (P.vx[p] + dvx) + (1.0 - q.flip_alpha) * vx;
+      P.vy[p] = q.flip_alpha * (P.vy[p] + dvy) + (1.0 - q.flip_alpha) * vy;
+    } else {
+      P.vx[p] = vx;
+      P.vy[p] = vy;
+    }
+  }
+  if constexpr (What != G2PWhat::Velocity) {
+    double x = P.x[p] + q.dt * vx;
+    if (g.periodic_x) {
+      const double L = g.length_x();
+      if (x < g.x0) x += L;
+      if (x >= g.x0 + L) x -= L;  // also catches x + L rounding up to x0 + L
+    }
+    P.x[p] = x;
+    P.y[p] += q.dt * vy;
+    P.Lxx[p] = lxx * inv_h; P.Lxy[p] = lxy * inv_h;
+    P.Lyx[p] = lyx * inv_h; P.Lyy[p] = lyy * inv_h;
+  }
+}
+
+// Parallel gather over particles in array order: race-free by construction.
+template <class Shape, bool FLIP, G2PWhat What>
+void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What>(g, G, P, p, q);
+}
+
+}  // namespace smpm::kern

@@ -1,0 +1,57 @@
+// Plain-pointer views of the particle and grid arrays the kernels work on.
+// The engine owns the storage (engine/particles.hpp, engine/grid.hpp); kernels never allocate.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+namespace smpm::kern {
+
+// Uniform 2D grid of cells of size h. Nodes (i, j), i in [0, nx], j in [0, ny], sit at
+// (x0 + i h, y0 + j h). Node storage carries `pad` ghost columns/rows on every side so that
+// stencils of particles near the domain edge never need a bounds check; with periodic x the
+// real columns are 0..nx-1 and ghosts are folded onto them after each scatter.
+struct GridGeom {
+  double h = 1.0, x0 = 0.0, y0 = 0.0;
+  int nx = 1, ny = 1;   // cells
+  int pad = 2;          // ghost nodes per side (>= 2 serves every shape function here)
+  int tile = 8;         // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
+  bool periodic_x = false;
+
+  int sx() const { return nx + 1 + 2 * pad; }  // storage row length
+  int sy() const { return ny + 1 + 2 * pad; }
+  std::size_t num_nodes() const { return static_cast<std::size_t>(sx()) * sy(); }
+  // storage index of node (i, j); i, j may be negative down to -pad
+  std::size_t node(int i, int j) const {
+    return static_cast<std::size_t>(j + pad) * sx() + static_cast<std::size_t>(i + pad);
+  }
+  int tiles_x() const { return (nx + tile - 1) / tile; }
+  int tiles_y() const { return (ny + tile - 1) / tile; }
+  int num_tiles() const { return tiles_x() * tiles_y(); }
+  // cell keys are tile-major: all cells of tile 0 (row by row), then tile 1, ...
+  int cells_per_tile() const { return tile * tile; }
+  std::size_t num_keys() const { return static_cast<std::size_t>(num_tiles()) * cells_per_tile(); }
+  double length_x() const { return nx * h; }
+  double length_y() const { return ny * h; }
+};
+
+struct GridView {
+  double* m;            // mass [kg/m]
+  double* px; double* py;  // momentum, then velocity after the grid update
+  double* fx; double* fy;  // force [N/m]
+  double* vx; double* vy;  // updated velocity (after forces and boundary conditions)
+  double* dvx; double* dvy;  // v_new - v_old, for FLIP (may be null when unused)
+};
+
+// Particle fields the transfer kernels read or write. Plane strain: stress is the deviator
+// (sxx, syy, sxy; szz = -(sxx + syy)) and the pressure p; total stress = s - p I.
+struct ParticleView {
+  double* x; double* y;
+  double* vx; double* vy;
+  const double* m;
+  double* V;            // current volume [m^2 per unit thickness]
+  double* sxx; double* syy; double* sxy; double* p;
+  // Velocity gradient L = grad v after G2P, which is also the APIC affine matrix C.
+  double* Lxx; double* Lxy; double* Lyx; double* Lyy;
+};
+
+}  // namespace smpm::kern
