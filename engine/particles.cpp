@@ -5,11 +5,14 @@
 namespace smpm {
 
 namespace {
+// Every double array in use: the optional ones only when allocated.
 template <class F>
 void for_each_double(Particles& P, F&& f) {
   for (auto* v : {&P.x, &P.y, &P.vx, &P.vy, &P.m, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Lxx, &P.Lxy,
                   &P.Lyx, &P.Lyy})
     f(*v);
+  if (!P.Cxx.empty())
+    for (auto* v : {&P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy}) f(*v);
 }
 }  // namespace
 
@@ -19,9 +22,17 @@ void Particles::resize(std::size_t n) {
   body.resize(n, 0);
 }
 
+void Particles::enable_affine(bool on) {
+  for (auto* v : {&Cxx, &Cxy, &Cyx, &Cyy}) {
+    if (on) v->assign(size(), 0.0);
+    else std::vector<double>().swap(*v);
+  }
+}
+
 kern::ParticleView Particles::view() {
-  return {x.data(),   y.data(),   vx.data(),  vy.data(),  m.data(),   V.data(),   sxx.data(),
-          syy.data(), sxy.data(), p.data(),   Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data()};
+  auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+  return {x.data(), y.data(), vx.data(), vy.data(), m.data(), V.data(), sxx.data(), syy.data(), sxy.data(),
+          p.data(), Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data(), d(Cxx), d(Cxy), d(Cyx), d(Cyy)};
 }
 
 void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su) {
@@ -50,6 +61,7 @@ void Particles::append(const Particles& o) {
   cat(x, o.x); cat(y, o.y); cat(vx, o.vx); cat(vy, o.vy); cat(m, o.m); cat(V, o.V);
   cat(sxx, o.sxx); cat(syy, o.syy); cat(sxy, o.sxy); cat(p, o.p);
   cat(Lxx, o.Lxx); cat(Lxy, o.Lxy); cat(Lyx, o.Lyx); cat(Lyy, o.Lyy);
+  cat(Cxx, o.Cxx); cat(Cxy, o.Cxy); cat(Cyx, o.Cyx); cat(Cyy, o.Cyy);
   cat(id, o.id); cat(body, o.body);
 }
 

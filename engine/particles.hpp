@@ -18,12 +18,15 @@ struct Particles {
   std::vector<double> V;          // current volume per unit thickness [m^2]
   std::vector<double> sxx, syy, sxy;  // stress deviator [Pa] (s_zz = -(s_xx + s_yy))
   std::vector<double> p;          // pressure [Pa], compression positive
-  std::vector<double> Lxx, Lxy, Lyx, Lyy;  // velocity gradient [1/s] (= APIC affine matrix)
+  std::vector<double> Lxx, Lxy, Lyx, Lyy;  // velocity gradient [1/s]
+  // Optional: sized 0 unless the scene needs them.
+  std::vector<double> Cxx, Cxy, Cyx, Cyy;  // APIC affine matrix [1/s]
   std::vector<std::uint32_t> id;  // original index, permuted along with the rest
   std::vector<std::uint8_t> body; // body index
 
   std::size_t size() const { return x.size(); }
-  void resize(std::size_t n);
+  void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)
+  void enable_affine(bool on);  // allocate (zeroed) or release the APIC matrix
   kern::ParticleView view();
   // Physically reorders every array so that array order becomes `order` (sorted order).
   void permute(const std::uint32_t* order, std::vector<double>& scratch_d,

@@ -32,6 +32,9 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       grid_(geom, cfg.transfer == Transfer::FLIP) {
   if (geom.tile < 4) throw std::invalid_argument("grid tile width must be >= 4 cells");
   const std::size_t n = P_.size();
+  P_.enable_affine(cfg_.transfer == Transfer::APIC);
+  // ids name particles in messages and snapshots: their order as given
+  for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);
   order_.resize(n);
   cell_start_.resize(geom.num_keys() + 1);
@@ -40,6 +43,9 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
+  double mmax = 0.0;
+  for (double m : P_.m) mmax = std::max(mmax, m);
+  mass_eps_ = 1e-9 * mmax;
   // first time step from the initial state
   max_speed_ = 0.0;
   auto pv = P_.view();
@@ -115,7 +121,7 @@ void Simulation::update_grid() {
   q.gravity_y = cfg_.gravity_y;
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
-  q.mass_eps = 0.0;
+  q.mass_eps = mass_eps_;
   kern::grid_update(g, G, q, row_force_.data());
   double* arrays[] = {G.vx, G.vy, G.dvx, G.dvy};
   kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);

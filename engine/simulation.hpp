@@ -104,6 +104,7 @@ class Simulation {
   std::vector<double> row_force_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
 
+  double mass_eps_ = 0.0;  // grid nodes lighter than this get no force (see GridUpdateParams)
   double time_ = 0.0, dt_ = 0.0, last_dt_ = 0.0, max_speed_ = 0.0;
   long steps_ = 0;
   WallForces wall_;

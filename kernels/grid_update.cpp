@@ -64,15 +64,16 @@ void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
       const double m = G.m[n];
-      if (m <= q.mass_eps) {
+      if (m <= 0.0) {
         G.vx[n] = G.vy[n] = 0.0;
         if (q.flip) G.dvx[n] = G.dvy[n] = 0.0;
         continue;
       }
       const double inv_m = 1.0 / m;
       double ux = G.px[n] * inv_m, uy = G.py[n] * inv_m;  // old velocity
-      double vx = ux + q.dt * (G.fx[n] * inv_m + q.gravity_x);
-      double vy = uy + q.dt * (G.fy[n] * inv_m + q.gravity_y);
+      const double acc = m > q.mass_eps ? q.dt : 0.0;
+      double vx = ux + acc * (G.fx[n] * inv_m + q.gravity_x);
+      double vy = uy + acc * (G.fy[n] * inv_m + q.gravity_y);
       double scratch[4] = {0, 0, 0, 0};
       constrain(g, q.walls, i, j, ux, uy, scratch);
       double dv[4] = {0, 0, 0, 0};
@@ -100,7 +101,7 @@ void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const Gri
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
       const double m = G.m[n];
-      if (m <= q.mass_eps) {
+      if (m <= 0.0) {
         G.vx[n] = G.vy[n] = 0.0;
         continue;
       }

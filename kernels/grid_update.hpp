@@ -17,7 +17,10 @@ struct Walls {
 struct GridUpdateParams {
   double dt = 0.0;
   double gravity_x = 0.0, gravity_y = 0.0;  // [m/s^2]
-  double mass_eps = 0.0;  // nodes with mass <= mass_eps are treated as empty
+  // Nodes with 0 < mass <= mass_eps (a particle's stencil tail, e.g. a linear-hat particle just
+  // past a node) move with their momentum only: a force over such a mass would give an
+  // arbitrarily large acceleration that the velocity gradient picks up through grad w.
+  double mass_eps = 0.0;
   Walls walls;
   bool flip = false;      // also store dv = v_new - v_old
 };

@@ -7,9 +7,14 @@
 
 namespace smpm::kern {
 
+// apic_gradient: for the linear hat, B D^-1 = sum_i v_i grad w_i^T exactly (D = f (1 - f) h^2
+// per axis vanishes on nodes), so APIC takes C from the gradient; the others use C = B D^-1
+// with D = sum_i w_i (x_i - x_p)^2 per axis (h^2/4 quadratic, h^2/3 cubic).
+
 // Linear hat (classic MPM, Sulsky 1994). Support 2 nodes.
 struct Linear {
   static constexpr int N = 2;
+  static constexpr bool apic_gradient = true;
   static constexpr const char* name = "linear";
   static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg);
@@ -26,6 +31,7 @@ struct Linear {
 // (0 < lp <= 0.5). Support 1 + lp on each side: up to 3 nodes.
 struct UGIMP {
   static constexpr int N = 3;
+  static constexpr bool apic_gradient = false;
   static constexpr const char* name = "ugimp";
   static inline void one(double d, double lp, double& w, double& dw) {
     const double a = std::fabs(d);
@@ -58,6 +64,7 @@ struct UGIMP {
 // Quadratic B-spline. Support 3 nodes.
 struct QuadraticBSpline {
   static constexpr int N = 3;
+  static constexpr bool apic_gradient = false;
   static constexpr const char* name = "quadratic";
   static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg - 0.5);
@@ -76,6 +83,7 @@ struct QuadraticBSpline {
 // Cubic B-spline. Support 4 nodes.
 struct CubicBSpline {
   static constexpr int N = 4;
+  static constexpr bool apic_gradient = false;
   static constexpr const char* name = "cubic";
   static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg) - 1.0;

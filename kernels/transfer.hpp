@@ -23,8 +23,7 @@ struct AtomicAdd {
   }
 };
 
-// Scatter of one particle p. APIC adds the affine momentum m C (x_i - x_p) with C = L
-// (for linear, quadratic and cubic splines B D^-1 equals sum_i v_i grad w_i^T exactly).
+// Scatter of one particle p. APIC adds the affine momentum m C (x_i - x_p).
 template <class Shape, bool APIC, P2GWhat What, class Add = PlainAdd>
 inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::uint32_t p,
                          double lp) {
@@ -38,8 +37,8 @@ inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleVie
   const double mvx = m * P.vx[p], mvy = m * P.vy[p];
   double mCxx = 0, mCxy = 0, mCyx = 0, mCyy = 0;
   if constexpr (APIC) {  // grid-unit offsets: fold h in here
-    mCxx = m * P.Lxx[p] * g.h; mCxy = m * P.Lxy[p] * g.h;
-    mCyx = m * P.Lyx[p] * g.h; mCyy = m * P.Lyy[p] * g.h;
+    mCxx = m * P.Cxx[p] * g.h; mCxy = m * P.Cxy[p] * g.h;
+    mCyx = m * P.Cyx[p] * g.h; mCyy = m * P.Cyy[p] * g.h;
   }
   double vsxx = 0, vsyy = 0, vsxy = 0;  // -V sigma / h
   if constexpr (What == P2GWhat::All) {
@@ -119,8 +118,8 @@ struct G2PParams {
   double flip_alpha = 0.0;   // FLIP fraction (FLIP transfers only)
 };
 
-// Gather for one particle. Velocity: PIC (APIC) or the FLIP/PIC blend. Position: moved with
-// the grid velocity. Gradient: L = sum_i v_i grad w_i^T (also the APIC affine matrix).
+// Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
+// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T.
 template <class Shape, bool FLIP, G2PWhat What>
 inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
@@ -131,8 +130,12 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
   const int bx = Shape::eval(xg, q.lp, wx, dwx);
   const int by = Shape::eval(yg, q.lp, wy, dwy);
   double vx = 0, vy = 0, dvx = 0, dvy = 0, lxx = 0, lxy = 0, lyx = 0, lyy = 0;
+  constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
+  constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
+  double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b);
+    const double dy = (by + b) - yg;
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
       const double w = wx[a] * wy[b];
@@ -143,11 +146,32 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
         dvx += w * G.dvx[n];
         dvy += w * G.dvy[n];
       }
-      if constexpr (What != G2PWhat::Velocity) {
+      if constexpr (kGrad) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
         lxx += gvx * gx; lxy += gvx * gy;
         lyx += gvy * gx; lyy += gvy * gy;
       }
+      if constexpr (kAffine && !Shape::apic_gradient) {
+        const double dx = (bx + a) - xg;
+        bxx += w * gvx * dx; bxy += w * gvx * dy;
+        byx += w * gvy * dx; byy += w * gvy * dy;
+      }
+    }
+  }
+  if constexpr (kAffine) {
+    if constexpr (Shape::apic_gradient) {
+      P.Cxx[p] = lxx * inv_h; P.Cxy[p] = lxy * inv_h;
+      P.Cyx[p] = lyx * inv_h; P.Cyy[p] = lyy * inv_h;
+    } else {  // C = B D^-1, D diagonal for tensor-product shapes
+      double Dx = 0, Dy = 0;
+      for (int a = 0; a < N; ++a) {
+        const double ex = (bx + a) - xg, ey = (by + a) - yg;
+        Dx += wx[a] * ex * ex;
+        Dy += wy[a] * ey * ey;
+      }
+      const double ix = inv_h / Dx, iy = inv_h / Dy;
+      P.Cxx[p] = bxx * ix; P.Cxy[p] = bxy * iy;
+      P.Cyx[p] = byx * ix; P.Cyy[p] = byy * iy;
     }
   }
   if constexpr (What != G2PWhat::PositionGradient) {

@@ -50,8 +50,10 @@ struct ParticleView {
   const double* m;
   double* V;            // current volume [m^2 per unit thickness]
   double* sxx; double* syy; double* sxy; double* p;
-  // Velocity gradient L = grad v after G2P, which is also the APIC affine matrix C.
+  // Velocity gradient L = sum_i v_i grad w_ip^T, set by G2P, read by the constitutive update.
   double* Lxx; double* Lxy; double* Lyx; double* Lyy;
+  // APIC affine matrix C = B D^-1 (null unless the transfer is APIC).
+  double* Cxx; double* Cxy; double* Cyx; double* Cyy;
 };
 
 }  // namespace smpm::kern

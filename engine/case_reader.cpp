@@ -1,0 +1,326 @@
+#include "engine/case_reader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace smpm {
+
+const Quantity kLength{"length", {{"m", 1.0}, {"mm", 1e-3}, {"um", 1e-6}}};
+const Quantity kTime{"time", {{"s", 1.0}, {"us", 1e-6}, {"ns", 1e-9}}};
+const Quantity kVelocity{"velocity", {{"m_s", 1.0}, {"km_s", 1e3}}};
+const Quantity kStress{"stress", {{"Pa", 1.0}, {"MPa", 1e6}, {"GPa", 1e9}}};
+const Quantity kDensity{"density", {{"kg_m3", 1.0}, {"g_cc", 1e3}}};
+const Quantity kAcceleration{"acceleration", {{"m_s2", 1.0}}};
+const Quantity kSpecificHeat{"specific heat", {{"J_kgK", 1.0}}};
+const Quantity kConductivity{"thermal conductivity", {{"W_mK", 1.0}}};
+const Quantity kTemperature{"temperature", {{"K", 1.0}}};
+const Quantity kDimensionless{"number", {}};
+
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+std::string join(const std::vector<std::string>& v) {
+  std::string r;
+  for (std::size_t i = 0; i < v.size(); ++i) r += (i ? ", " : "") + ("'" + v[i] + "'");
+  return r;
+}
+
+std::string where(const toml::node& n) {
+  const auto& s = n.source();
+  if (!s.begin) return "";
+  return " (line " + std::to_string(s.begin.line) + ")";
+}
+
+std::optional<double> as_number(const toml::node& n) {
+  if (auto v = n.value<double>()) return *v;  // integers convert too
+  return std::nullopt;
+}
+
+}  // namespace
+
+const toml::table& CaseReader::empty() {
+  static const toml::table t;
+  return t;
+}
+
+CaseReader::CaseReader(const toml::table& table, std::string path, toml::table& resolved)
+    : t_(&table), path_(std::move(path)), out_(&resolved) {}
+
+void CaseReader::fail(const std::string& key, const std::string& msg) const {
+  const std::string full = path_.empty() ? key : path_ + "." + key;
+  const toml::node* n = t_->get(key);
+  throw CaseError("case key '" + full + "'" + (n ? where(*n) : "") + ": " + msg);
+}
+
+const toml::node* CaseReader::find(const std::string& key) {
+  const toml::node* n = t_->get(key);
+  if (n) used_.push_back(key);
+  return n;
+}
+
+bool CaseReader::has(const std::string& key) const {
+  if (t_->get(key)) return true;
+  for (const Quantity* q : {&kLength, &kTime, &kVelocity, &kStress, &kDensity, &kAcceleration, &kSpecificHeat,
+                            &kConductivity, &kTemperature})
+    for (const auto& [suf, f] : q->suffixes)
+      if (t_->get(key + "_" + suf)) return true;
+  return false;
+}
+
+std::pair<std::string, double> CaseReader::find_quantity(const std::string& key, const Quantity& q) {
+  if (q.suffixes.empty()) return {t_->get(key) ? key : "", 1.0};
+  std::string found;
+  double factor = 1.0;
+  std::vector<std::string> names;
+  for (const auto& [suf, f] : q.suffixes) {
+    const std::string k = key + "_" + suf;
+    names.push_back(k);
+    if (t_->get(k)) {
+      if (!found.empty()) fail(k, "given twice, also as '" + found + "'; keep one");
+      found = k;
+      factor = f;
+    }
+  }
+  if (found.empty() && t_->get(key))
+    fail(key, "a " + std::string(q.what) + " needs its unit in the key name: one of " + join(names));
+  return {found, factor};
+}
+
+double CaseReader::quantity(const std::string& key, const Quantity& q, double lo, double hi) {
+  auto [k, f] = find_quantity(key, q);
+  if (k.empty()) {
+    std::vector<std::string> names;
+    for (const auto& [suf, ff] : q.suffixes) names.push_back(key + "_" + suf);
+    if (names.empty()) names.push_back(key);
+    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + names.front() +
+                    "' is required (a " + q.what + "; accepted spellings: " + join(names) + ")");
+  }
+  const toml::node* n = find(k);
+  const auto v = as_number(*n);
+  if (!v) fail(k, "expected a number, got " + std::string(toml::impl::node_type_friendly_names[(int)n->type()]));
+  const double si = *v * f;
+  if (!std::isfinite(si) || si < lo || si > hi)
+    fail(k, "value " + fmt(*v) + " is out of range: allowed " + fmt(lo / f) + " to " + fmt(hi / f));
+  out_->insert_or_assign(k, *v);
+  return si;
+}
+
+double CaseReader::quantity(const std::string& key, const Quantity& q, double lo, double hi, double def) {
+  auto [k, f] = find_quantity(key, q);
+  if (k.empty()) {
+    const std::string canon = q.suffixes.empty() ? key : key + "_" + q.suffixes.front().first;
+    out_->insert_or_assign(canon, def);
+    return def;
+  }
+  return quantity(key, q, lo, hi);
+}
+
+std::pair<double, double> CaseReader::pair(const std::string& key, const Quantity& q, bool increasing) {
+  auto [k, f] = find_quantity(key, q);
+  if (k.empty()) {
+    std::vector<std::string> names;
+    for (const auto& [suf, ff] : q.suffixes) names.push_back(key + "_" + suf);
+    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + (names.empty() ? key : names.front()) +
+                    "' is required (two numbers, e.g. [0, 1]; accepted spellings: " + join(names) + ")");
+  }
+  const toml::node* n = find(k);
+  const toml::array* a = n->as_array();
+  if (!a || a->size() != 2 || !as_number(*a->get(0)) || !as_number(*a->get(1)))
+    fail(k, "expected two numbers, e.g. [0, 1]");
+  const double v0 = *as_number(*a->get(0)), v1 = *as_number(*a->get(1));
+  if (!std::isfinite(v0) || !std::isfinite(v1)) fail(k, "values must be finite");
+  if (increasing && !(v0 < v1)) fail(k, "[" + fmt(v0) + ", " + fmt(v1) + "]: the first value must be below the second");
+  toml::array r{v0, v1};
+  out_->insert_or_assign(k, std::move(r));
+  return {v0 * f, v1 * f};
+}
+
+std::pair<double, double> CaseReader::pair(const std::string& key, const Quantity& q, bool increasing,
+                                           std::pair<double, double> def) {
+  auto [k, f] = find_quantity(key, q);
+  if (k.empty()) {
+    toml::array r{def.first, def.second};
+    out_->insert_or_assign(q.suffixes.empty() ? key : key + "_" + q.suffixes.front().first, std::move(r));
+    return def;
+  }
+  return pair(key, q, increasing);
+}
+
+double CaseReader::number(const std::string& key, double lo, double hi) {
+  const toml::node* n = find(key);
+  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a number from " + fmt(lo) + " to " + fmt(hi) + ")");
+  const auto v = as_number(*n);
+  if (!v) fail(key, "expected a number");
+  if (!std::isfinite(*v) || *v < lo || *v > hi)
+    fail(key, "value " + fmt(*v) + " is out of range: allowed " + fmt(lo) + " to " + fmt(hi));
+  out_->insert_or_assign(key, *v);
+  return *v;
+}
+
+double CaseReader::number(const std::string& key, double lo, double hi, double def) {
+  if (!t_->get(key)) {
+    out_->insert_or_assign(key, def);
+    return def;
+  }
+  return number(key, lo, hi);
+}
+
+long CaseReader::integer(const std::string& key, long lo, long hi) {
+  const toml::node* n = find(key);
+  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ")");
+  const auto v = n->value_exact<int64_t>();
+  if (!v) fail(key, "expected a whole number");
+  if (*v < lo || *v > hi)
+    fail(key, "value " + std::to_string(*v) + " is out of range: allowed " + std::to_string(lo) + " to " + std::to_string(hi));
+  out_->insert_or_assign(key, *v);
+  return static_cast<long>(*v);
+}
+
+long CaseReader::integer(const std::string& key, long lo, long hi, long def) {
+  if (!t_->get(key)) {
+    out_->insert_or_assign(key, static_cast<int64_t>(def));
+    return def;
+  }
+  return integer(key, lo, hi);
+}
+
+bool CaseReader::boolean(const std::string& key, bool def) {
+  const toml::node* n = find(key);
+  if (!n) {
+    out_->insert_or_assign(key, def);
+    return def;
+  }
+  const auto v = n->value_exact<bool>();
+  if (!v) fail(key, "expected true or false");
+  out_->insert_or_assign(key, *v);
+  return *v;
+}
+
+std::string CaseReader::string(const std::string& key) {
+  const toml::node* n = find(key);
+  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a string)");
+  const auto v = n->value_exact<std::string>();
+  if (!v) fail(key, "expected a string in quotes");
+  out_->insert_or_assign(key, *v);
+  return *v;
+}
+
+std::string CaseReader::string(const std::string& key, const std::string& def) {
+  if (!t_->get(key)) {
+    out_->insert_or_assign(key, def);
+    return def;
+  }
+  return string(key);
+}
+
+std::string CaseReader::choice(const std::string& key, const std::vector<std::string>& allowed) {
+  if (!t_->get(key))
+    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (one of " + join(allowed) + ")");
+  const std::string v = string(key);
+  if (std::find(allowed.begin(), allowed.end(), v) == allowed.end())
+    fail(key, "'" + v + "' is not a valid choice: allowed " + join(allowed));
+  return v;
+}
+
+std::string CaseReader::choice(const std::string& key, const std::vector<std::string>& allowed,
+                               const std::string& def) {
+  if (!t_->get(key)) {
+    out_->insert_or_assign(key, def);
+    return def;
+  }
+  return choice(key, allowed);
+}
+
+CaseReader CaseReader::table(const std::string& key) {
+  const toml::node* n = find(key);
+  if (n && !n->is_table()) fail(key, "expected a table ([" + key + "])");
+  auto [it, ok] = out_->insert_or_assign(key, toml::table{});
+  (void)ok;
+  return CaseReader(n ? *n->as_table() : empty(), path_.empty() ? key : path_ + "." + key,
+                    *it->second.as_table());
+}
+
+std::vector<CaseReader> CaseReader::tables(const std::string& key) {
+  std::vector<CaseReader> r;
+  const toml::node* n = find(key);
+  if (!n) return r;
+  const toml::array* a = n->as_array();
+  if (!a || !a->is_array_of_tables()) fail(key, "expected an array of tables ([[" + key + "]])");
+  auto [it, ok] = out_->insert_or_assign(key, toml::array{});
+  (void)ok;
+  toml::array* oa = it->second.as_array();
+  for (std::size_t i = 0; i < a->size(); ++i) oa->push_back(toml::table{});
+  for (std::size_t i = 0; i < a->size(); ++i)
+    r.emplace_back(*a->get(i)->as_table(), (path_.empty() ? key : path_ + "." + key) + "[" + std::to_string(i) + "]",
+                   *oa->get(i)->as_table());
+  return r;
+}
+
+void CaseReader::finish() const {
+  std::vector<std::string> unknown;
+  for (const auto& [k, v] : *t_) {
+    const std::string key(k.str());
+    if (std::find(used_.begin(), used_.end(), key) == used_.end()) unknown.push_back(key);
+  }
+  if (unknown.empty()) return;
+  std::vector<std::string> known = used_;
+  for (const auto& [k, v] : *out_) known.push_back(std::string(k.str()));
+  std::sort(known.begin(), known.end());
+  known.erase(std::unique(known.begin(), known.end()), known.end());
+  throw CaseError("unknown key" + std::string(unknown.size() > 1 ? "s " : " ") + join(unknown) + " in " +
+                  (path_.empty() ? "the top level" : "[" + path_ + "]") + "; the keys read here are " + join(known));
+}
+
+toml::table parse_case_file(const std::filesystem::path& file) {
+  if (!std::filesystem::exists(file)) throw CaseError("case file '" + file.string() + "' does not exist");
+  try {
+    return toml::parse_file(file.string());
+  } catch (const toml::parse_error& e) {
+    std::ostringstream s;
+    s << "case file '" << file.string() << "' line " << e.source().begin.line << ", column "
+      << e.source().begin.column << ": " << e.description();
+    throw CaseError(s.str());
+  }
+}
+
+void apply_overrides(toml::table& t, const std::vector<std::string>& sets) {
+  for (const auto& s : sets) {
+    const auto eq = s.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw CaseError("--set '" + s + "': expected section.key=value (value in TOML syntax, strings quoted)");
+    const std::string path = s.substr(0, eq);
+    const std::string value = s.substr(eq + 1);
+    toml::table parsed;
+    try {
+      parsed = toml::parse("v = " + value);
+    } catch (const toml::parse_error& e) {
+      throw CaseError("--set '" + s + "': value is not valid TOML (" + std::string(e.description()) +
+                      "); quote strings, e.g. solver.scheme=\"musl\"");
+    }
+    toml::table* cur = &t;
+    std::string rest = path;
+    for (;;) {
+      const auto dot = rest.find('.');
+      if (dot == std::string::npos) break;
+      const std::string part = rest.substr(0, dot);
+      rest = rest.substr(dot + 1);
+      toml::node* n = cur->get(part);
+      if (!n) {
+        cur->insert(part, toml::table{});
+        n = cur->get(part);
+      }
+      if (!n->is_table()) throw CaseError("--set '" + s + "': '" + part + "' is not a table");
+      cur = n->as_table();
+    }
+    cur->insert_or_assign(rest, *parsed.get("v"));
+  }
+}
+
+}  // namespace smpm

@@ -1,0 +1,220 @@
+#include "engine/run.hpp"
+
+#include <omp.h>
+
+#include <atomic>
+#include <csignal>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "engine/output.hpp"
+
+namespace smpm {
+
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted = true; }
+
+std::string hms(double s) {
+  if (!std::isfinite(s) || s < 0) return "--:--:--";
+  const long t = std::lround(s);
+  char b[32];
+  std::snprintf(b, sizeof b, "%02ld:%02ld:%02ld", t / 3600, (t / 60) % 60, t % 60);
+  return b;
+}
+
+std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
+  const Particles& P = sim.particles();
+  const std::size_t n = P.size();
+  std::vector<SnapshotField> f;
+  auto vec = [&](const char* name, const char* units, const std::vector<double>& a, const std::vector<double>& b) {
+    SnapshotField s{name, units, 2, std::vector<double>(2 * n)};
+    for (std::size_t i = 0; i < n; ++i) {
+      s.data[2 * i] = a[i];
+      s.data[2 * i + 1] = b[i];
+    }
+    f.push_back(std::move(s));
+  };
+  auto scal = [&](const char* name, const char* units, auto get) {
+    SnapshotField s{name, units, 1, std::vector<double>(n)};
+    for (std::size_t i = 0; i < n; ++i) s.data[i] = get(i);
+    f.push_back(std::move(s));
+  };
+  vec("position", "m", P.x, P.y);
+  vec("velocity", "m/s", P.vx, P.vy);
+  scal("pressure", "Pa", [&](std::size_t i) { return P.p[i]; });
+  scal("density", "kg/m^3", [&](std::size_t i) { return P.m[i] / P.V[i]; });
+  scal("stress_xx", "Pa", [&](std::size_t i) { return P.sxx[i] - P.p[i]; });
+  scal("stress_yy", "Pa", [&](std::size_t i) { return P.syy[i] - P.p[i]; });
+  scal("stress_xy", "Pa", [&](std::size_t i) { return P.sxy[i]; });
+  scal("stress_zz", "Pa", [&](std::size_t i) { return -(P.sxx[i] + P.syy[i]) - P.p[i]; });
+  scal("body", "1", [&](std::size_t i) { return double(P.body[i]); });
+  scal("id", "1", [&](std::size_t i) { return double(P.id[i]); });
+  return f;
+}
+
+void write_run_json(const std::filesystem::path& file, const Scene& scene, const Simulation& sim,
+                    const RunSummary& s, int threads) {
+  toml::table t;
+  t.insert("version", SHOCKMPM_VERSION);
+  t.insert("case", scene.name);
+  t.insert("status", s.status);
+  t.insert("message", s.message);
+  t.insert("threads", threads);
+  t.insert("particles", static_cast<int64_t>(sim.particles().size()));
+  t.insert("nodes", static_cast<int64_t>(sim.grid().geom.num_nodes()));
+  t.insert("steps", static_cast<int64_t>(s.steps));
+  t.insert("end_time_s", s.end_time);
+  t.insert("wall_seconds", s.wall_seconds);
+  t.insert("particle_steps_per_s", s.particle_steps_per_s);
+  t.insert("resident_bytes", static_cast<int64_t>(sim.bytes()));
+  const auto& pt = sim.phase_times();
+  t.insert("phase_seconds", toml::table{{"sort", pt.sort}, {"p2g", pt.p2g}, {"grid", pt.grid}, {"g2p", pt.g2p},
+                                        {"constitutive", pt.constitutive}});
+  toml::array bodies;
+  for (const auto& b : scene.bodies)
+    bodies.push_back(toml::table{{"name", b.name}, {"material", b.material},
+                                 {"particles", static_cast<int64_t>(b.particles)}, {"area_m2", b.area}});
+  t.insert("bodies", std::move(bodies));
+  t.insert("case_resolved", scene.resolved);
+  const auto tmp = file.string() + ".tmp";
+  {
+    std::ofstream o(tmp);
+    o << toml::json_formatter{t} << "\n";
+    if (!o) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, file);
+}
+
+}  // namespace
+
+std::string describe_scene(const Scene& sc) {
+  std::ostringstream o;
+  const auto& g = sc.geom;
+  o << "case            " << sc.name << "\n";
+  o << "grid            " << g.nx << " x " << g.ny << " cells of " << g.h * 1e6 << " um, x in [" << g.x0 * 1e6
+    << ", " << (g.x0 + g.length_x()) * 1e6 << "] um, y in [" << g.y0 * 1e6 << ", " << (g.y0 + g.length_y()) * 1e6
+    << "] um" << (g.periodic_x ? ", periodic in x" : "") << "\n";
+  o << "particles       " << sc.particles.size() << "\n";
+  for (const auto& b : sc.bodies)
+    o << "  body " << std::left << std::setw(10) << b.name << std::right << " material " << b.material << ", "
+      << b.particles << " particles, area " << b.area * 1e12 << " um^2\n";
+  Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  const double dt = sim.stable_dt();
+  o << "time step       " << dt * 1e9 << " ns (" << (sc.solver.fixed_dt > 0 ? "fixed" : "CFL at t = 0") << ")\n";
+  o << "end time        " << sc.run.end_time * 1e9 << " ns, about " << std::llround(std::ceil(sc.run.end_time / dt))
+    << " steps\n";
+  o << "memory          " << std::fixed << std::setprecision(1) << sim.bytes() / 1048576.0 << " MiB resident ("
+    << std::setprecision(0) << double(sim.particles().bytes()) / std::max<std::size_t>(1, sc.particles.size())
+    << " bytes per particle)\n";
+  return o.str();
+}
+
+RunSummary run_scene(Scene& scene, const RunOptions& opt) {
+  if (opt.threads > 0) omp_set_num_threads(opt.threads);
+  const int threads = omp_get_max_threads();
+  const auto out = opt.out_dir.empty() ? std::filesystem::path("out") / scene.name : opt.out_dir;
+  std::filesystem::create_directories(out);
+  {
+    std::ofstream c(out / "case_resolved.toml");
+    c << scene.resolved << "\n";
+  }
+  Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
+  SnapshotWriter snaps(out / "fields");
+  std::ofstream energy(out / "energy.csv");
+  energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m\n";
+  energy << std::setprecision(12);
+  const bool has_wall = scene.solver.walls.bottom != kern::Wall::None;
+  std::ofstream wall;
+  if (has_wall) {
+    wall.open(out / "wall.csv");
+    wall << "time_ns,wall_stress_GPa\n" << std::setprecision(10);
+  }
+  auto write_energy = [&] {
+    const auto e = sim.energy();
+    const auto q = sim.momentum();
+    energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
+           << q[1] << '\n';
+  };
+  RunSummary s;
+  s.status = "running";
+  write_run_json(out / "run.json", scene, sim, s, threads);
+  std::signal(SIGINT, on_sigint);
+  g_interrupted = false;
+
+  const double t_end = scene.run.end_time;
+  const double eps = 1e-12 * std::max(t_end, 1e-30);
+  double next_snap = 0.0, next_energy = 0.0;
+  const double wall0 = omp_get_wtime();
+  double last_progress = wall0;
+  double particle_steps = 0.0;
+  const double n = static_cast<double>(sim.particles().size());
+  try {
+    snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+    next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
+    write_energy();
+    next_energy = scene.run.energy_interval;
+    while (sim.time() < t_end - eps) {
+      if (g_interrupted) {
+        s.status = "interrupted";
+        s.message = "interrupted by SIGINT at step " + std::to_string(sim.steps());
+        break;
+      }
+      if (scene.run.max_steps > 0 && sim.steps() >= scene.run.max_steps) {
+        s.status = "completed";
+        s.message = "stopped at run.max_steps = " + std::to_string(scene.run.max_steps);
+        break;
+      }
+      sim.step(t_end - sim.time());
+      particle_steps += n;
+      if (has_wall)
+        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
+      if (sim.time() >= next_energy - eps) {
+        write_energy();
+        next_energy = sim.time() + scene.run.energy_interval;
+      }
+      if (sim.time() >= next_snap - eps && sim.time() < t_end - eps) {
+        snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+        next_snap += scene.run.snapshot_interval;
+      }
+      const double now = omp_get_wtime();
+      if (!opt.quiet && now - last_progress >= scene.run.progress_interval) {
+        last_progress = now;
+        const double frac = sim.time() / t_end, el = now - wall0;
+        std::printf("step %8ld  t = %10.4g ns  dt = %9.3g ns  %5.1f %%  ETA %s  %.3g M particle-steps/s\n",
+                    sim.steps(), sim.time() * 1e9, sim.last_dt() * 1e9, 100 * frac,
+                    hms(el * (1 - frac) / std::max(frac, 1e-12)).c_str(), particle_steps / el * 1e-6);
+        std::fflush(stdout);
+      }
+    }
+    if (s.status == "running") {
+      s.status = "completed";
+      s.message = "reached end_time";
+    }
+  } catch (const StepError& e) {
+    s.status = "failed";
+    s.message = e.what();
+  }
+  s.steps = sim.steps();
+  s.end_time = sim.time();
+  s.wall_seconds = omp_get_wtime() - wall0;
+  s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
+  // final state, whatever happened
+  write_energy();
+  snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+  write_run_json(out / "run.json", scene, sim, s, threads);
+  if (!opt.quiet) {
+    std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",
+                s.status.c_str(), s.steps, s.end_time * 1e9, s.wall_seconds, s.particle_steps_per_s * 1e-6, threads);
+    if (s.status != "completed") std::printf("reason: %s\n", s.message.c_str());
+    std::printf("results in %s\n", out.string().c_str());
+  }
+  return s;
+}
+
+}  // namespace smpm

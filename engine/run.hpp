@@ -1,0 +1,32 @@
+// Running a scene: the step loop with progress lines, diagnostics files, snapshots and
+// run.json. Nothing is lost on failure: a run that stops early (invalid state, interrupt)
+// still writes its last snapshot and a run.json that says how and why it ended.
+#pragma once
+#include <filesystem>
+#include <string>
+
+#include "engine/scene.hpp"
+
+namespace smpm {
+
+struct RunOptions {
+  std::filesystem::path out_dir;  // default out/<case stem>
+  int threads = 0;                // 0: OpenMP default
+  bool quiet = false;             // no progress lines
+};
+
+struct RunSummary {
+  std::string status;  // "completed", "failed", "interrupted"
+  std::string message;
+  long steps = 0;
+  double end_time = 0.0;
+  double wall_seconds = 0.0;
+  double particle_steps_per_s = 0.0;
+};
+
+RunSummary run_scene(Scene& scene, const RunOptions& opt);
+
+// The text `shockmpm check` prints: particles, porosity, grid, time step, steps, memory.
+std::string describe_scene(const Scene& scene);
+
+}  // namespace smpm

@@ -1,0 +1,229 @@
+#include "engine/scene.hpp"
+
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "engine/case_reader.hpp"
+
+namespace smpm {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+kern::Wall wall_kind(const std::string& s) {
+  if (s == "slip") return kern::Wall::Slip;
+  if (s == "noslip") return kern::Wall::NoSlip;
+  return kern::Wall::None;
+}
+
+Material read_material(CaseReader r, const std::string& name) {
+  Material m;
+  m.name = name;
+  r.choice("eos", eos_names(), "linear");
+  r.choice("strength", strength_names(), "elastic");
+  m.eos = EosKind::Linear;
+  m.strength = StrengthKind::Elastic;
+  m.rho0 = r.quantity("density", kDensity, 1e-6, 1e6);
+  m.E = r.quantity("youngs_modulus", kStress, 1e-12, 1e15);
+  m.nu = r.number("poisson_ratio", 0.0, 0.499);
+  r.finish();
+  return m;
+}
+
+// Lattice of sub-cell centres: point (a, b) at (x0 + (a + 0.5) d, y0 + (b + 0.5) d), d = h / ppc.
+template <class Inside>
+Particles fill_lattice(const kern::GridGeom& g, int ppc, double bx0, double bx1, double by0, double by1,
+                       double rho0, double vx, double vy, std::uint8_t body, Inside inside) {
+  Particles P;
+  const double d = g.h / ppc;
+  const long a0 = std::max(0L, static_cast<long>(std::floor((bx0 - g.x0) / d - 0.5)));
+  const long a1 = std::min(static_cast<long>(g.nx) * ppc - 1, static_cast<long>(std::ceil((bx1 - g.x0) / d)));
+  const long b0 = std::max(0L, static_cast<long>(std::floor((by0 - g.y0) / d - 0.5)));
+  const long b1 = std::min(static_cast<long>(g.ny) * ppc - 1, static_cast<long>(std::ceil((by1 - g.y0) / d)));
+  std::size_t n = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) P.resize(n);
+    std::size_t k = 0;
+    for (long b = b0; b <= b1; ++b) {
+      const double y = g.y0 + (b + 0.5) * d;
+      for (long a = a0; a <= a1; ++a) {
+        const double x = g.x0 + (a + 0.5) * d;
+        if (!inside(x, y)) continue;
+        if (pass == 1) {
+          P.x[k] = x;
+          P.y[k] = y;
+          P.vx[k] = vx;
+          P.vy[k] = vy;
+          P.V[k] = d * d;
+          P.m[k] = rho0 * d * d;
+          P.body[k] = body;
+        }
+        ++k;
+      }
+    }
+    n = k;
+  }
+  return P;
+}
+
+}  // namespace
+
+Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
+                         double rho0, double vx, double vy, std::uint8_t body) {
+  return fill_lattice(g, ppc, x0, x1, y0, y1, rho0, vx, vy, body,
+                      [&](double x, double y) { return x >= x0 && x < x1 && y >= y0 && y < y1; });
+}
+
+Scene build_scene(const toml::table& doc, const std::string& name) {
+  Scene s;
+  s.name = name;
+  CaseReader top(doc, "", s.resolved);
+
+  // [run]
+  {
+    CaseReader r = top.table("run");
+    s.run.end_time = r.quantity("end_time", kTime, 0.0, kInf);
+    s.run.snapshot_interval = r.quantity("snapshot_interval", kTime, 0.0, kInf, 0.0);
+    s.run.energy_interval = r.quantity("energy_interval", kTime, 0.0, kInf, 0.0);
+    s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
+    s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
+    r.finish();
+  }
+  // [grid]
+  {
+    CaseReader r = top.table("grid");
+    const double h = r.quantity("cell_size", kLength, 1e-12, kInf);
+    const auto [x0, x1] = r.pair("x_range", kLength, true);
+    const auto [y0, y1] = r.pair("y_range", kLength, true);
+    s.geom.h = h;
+    s.geom.x0 = x0;
+    s.geom.y0 = y0;
+    const double fx = (x1 - x0) / h, fy = (y1 - y0) / h;
+    s.geom.nx = static_cast<int>(std::lround(fx));
+    s.geom.ny = static_cast<int>(std::lround(fy));
+    if (std::fabs(fx - s.geom.nx) > 1e-6 * fx || s.geom.nx < 1)
+      throw CaseError("case key 'grid.x_range': width " + std::to_string(x1 - x0) +
+                      " m is not a whole number of cells of 'grid.cell_size' " + std::to_string(h) + " m");
+    if (std::fabs(fy - s.geom.ny) > 1e-6 * fy || s.geom.ny < 1)
+      throw CaseError("case key 'grid.y_range': height " + std::to_string(y1 - y0) +
+                      " m is not a whole number of cells of 'grid.cell_size' " + std::to_string(h) + " m");
+    s.geom.periodic_x = r.boolean("periodic_x", false);
+    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, 64, 8));
+    if (s.geom.periodic_x && s.geom.nx < 4)
+      throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
+                      std::to_string(s.geom.nx));
+    r.finish();
+  }
+  // [solver]
+  int ppc_all = 0;
+  {
+    CaseReader r = top.table("solver");
+    const std::string shape = r.choice("shape", {"linear", "ugimp", "quadratic", "cubic"}, "quadratic");
+    s.solver.shape = shape == "linear"   ? kern::ShapeKind::Linear
+                     : shape == "ugimp"  ? kern::ShapeKind::UGIMP
+                     : shape == "cubic"  ? kern::ShapeKind::Cubic
+                                         : kern::ShapeKind::Quadratic;
+    s.solver.transfer = r.choice("transfer", {"apic", "flip"}, "apic") == "flip" ? Transfer::FLIP : Transfer::APIC;
+    s.solver.flip_alpha = r.number("flip_alpha", 0.0, 1.0, 0.99);
+    s.solver.scheme = r.choice("scheme", {"usl", "musl"}, "usl") == "musl" ? Scheme::MUSL : Scheme::USL;
+    s.solver.cfl = r.number("cfl", 1e-6, 1.0, 0.4);
+    s.solver.fixed_dt = r.quantity("dt", kTime, 0.0, kInf, 0.0);
+    s.solver.permute_every = static_cast<int>(r.integer("permute_every", 0, 1000000, 20));
+    const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
+    s.solver.gravity_x = gx;
+    s.solver.gravity_y = gy;
+    r.finish();
+  }
+  // [walls]
+  {
+    CaseReader r = top.table("walls");
+    const std::vector<std::string> kinds{"none", "slip", "noslip"};
+    s.solver.walls.left = wall_kind(r.choice("left", kinds, "none"));
+    s.solver.walls.right = wall_kind(r.choice("right", kinds, "none"));
+    s.solver.walls.bottom = wall_kind(r.choice("bottom", kinds, "none"));
+    s.solver.walls.top = wall_kind(r.choice("top", kinds, "none"));
+    if (s.geom.periodic_x && (s.solver.walls.left != kern::Wall::None || s.solver.walls.right != kern::Wall::None))
+      throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
+    r.finish();
+  }
+  // [materials.NAME]
+  std::unordered_map<std::string, int> mat_index;
+  {
+    CaseReader r = top.table("materials");
+    const toml::table* mt = doc.get_as<toml::table>("materials");
+    if (!mt || mt->empty()) throw CaseError("case table [materials] is required: add at least one [materials.NAME]");
+    for (const auto& [k, v] : *mt) {
+      const std::string mname(k.str());
+      mat_index[mname] = static_cast<int>(s.materials.size());
+      s.materials.push_back(read_material(r.table(mname), mname));
+    }
+    r.finish();
+  }
+  // [[bodies]]
+  {
+    auto bodies = top.tables("bodies");
+    if (bodies.empty()) throw CaseError("case array [[bodies]] is required: add at least one body");
+    if (bodies.size() > 255) throw CaseError("case array [[bodies]]: at most 255 bodies, got " + std::to_string(bodies.size()));
+    std::unordered_map<long long, std::size_t> taken;  // lattice site -> body, to reject overlaps
+    for (std::size_t b = 0; b < bodies.size(); ++b) {
+      CaseReader& r = bodies[b];
+      BodyInfo info;
+      info.name = r.string("name", "body" + std::to_string(b));
+      info.material = r.string("material");
+      auto it = mat_index.find(info.material);
+      if (it == mat_index.end()) {
+        std::string names;
+        for (const auto& m : s.materials) names += (names.empty() ? "'" : ", '") + m.name + "'";
+        throw CaseError("case key '" + r.path() + ".material': '" + info.material + "' is not a material of this case; defined: " + names);
+      }
+      const Material& mat = s.materials[it->second];
+      const int ppc = static_cast<int>(r.integer("points_per_cell", 1, 8, 2));
+      if (ppc_all && ppc != ppc_all)
+        throw CaseError("case key '" + r.path() + ".points_per_cell': " + std::to_string(ppc) +
+                        " differs from the first body's " + std::to_string(ppc_all) + "; all bodies share one point lattice");
+      ppc_all = ppc;
+      const auto [vx, vy] = r.pair("velocity", kVelocity, false, {0.0, 0.0});
+      const std::string shape = r.choice("shape", {"rectangle", "disk"}, "rectangle");
+      Particles P;
+      double bx0, bx1, by0, by1;
+      if (shape == "rectangle") {
+        std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
+        std::tie(by0, by1) = r.pair("y_range", kLength, true);
+        P = fill_rectangle(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b));
+      } else {
+        const auto [cx, cy] = r.pair("center", kLength, false);
+        const double rad = r.quantity("radius", kLength, 0.0, kInf);
+        bx0 = cx - rad; bx1 = cx + rad; by0 = cy - rad; by1 = cy + rad;
+        P = fill_lattice(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b),
+                         [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
+      }
+      r.finish();
+      const double gx1 = s.geom.x0 + s.geom.length_x(), gy1 = s.geom.y0 + s.geom.length_y();
+      if (bx0 < s.geom.x0 || bx1 > gx1 || by0 < s.geom.y0 || by1 > gy1)
+        throw CaseError("case body '" + r.path() + "' (" + info.name + ") extends outside the grid [" +
+                        std::to_string(s.geom.x0) + ", " + std::to_string(gx1) + "] x [" + std::to_string(s.geom.y0) +
+                        ", " + std::to_string(gy1) + "] m");
+      if (P.size() == 0) throw CaseError("case body '" + r.path() + "' (" + info.name + ") holds no points: it is smaller than the point spacing");
+      const double d = s.geom.h / ppc;
+      for (std::size_t i = 0; i < P.size(); ++i) {
+        const long long a = std::llround((P.x[i] - s.geom.x0) / d - 0.5), c = std::llround((P.y[i] - s.geom.y0) / d - 0.5);
+        auto [pos, fresh] = taken.emplace(c * (1LL << 32) + a, b);
+        if (!fresh)
+          throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + r.path() + "' overlap near (" +
+                          std::to_string(P.x[i]) + ", " + std::to_string(P.y[i]) + ") m");
+      }
+      info.particles = P.size();
+      info.area = P.size() * d * d;
+      s.body_material.push_back(it->second);
+      s.bodies.push_back(info);
+      s.particles.append(P);
+    }
+    s.solver.ugimp_lp = 0.5 / ppc_all;
+  }
+  top.finish();
+  return s;
+}
+
+}  // namespace smpm

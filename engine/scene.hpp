@@ -1,0 +1,51 @@
+// Scenes: a case file turned into a grid, solver settings, materials and filled bodies.
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "engine/material.hpp"
+#include "engine/particles.hpp"
+#include "engine/simulation.hpp"
+
+namespace smpm {
+
+// What a run does besides stepping: when to stop, what to write and how often.
+struct RunControl {
+  double end_time = 0.0;           // [s]
+  double snapshot_interval = 0.0;  // [s]; 0: first and last state only
+  double energy_interval = 0.0;    // [s]; rows of energy.csv (0: every step)
+  double progress_interval = 5.0;  // [s of wall time] between progress lines
+  long max_steps = 0;              // 0: no limit
+};
+
+struct BodyInfo {
+  std::string name;
+  std::string material;
+  std::size_t particles = 0;
+  double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
+};
+
+struct Scene {
+  kern::GridGeom geom;
+  SolverConfig solver;
+  RunControl run;
+  std::vector<Material> materials;
+  std::vector<int> body_material;
+  std::vector<BodyInfo> bodies;
+  Particles particles;
+  toml::table resolved;  // the case with every default filled in
+  std::string name;      // case file stem
+};
+
+// Builds a scene from a parsed case. Throws CaseError with the key, value and allowed range.
+Scene build_scene(const toml::table& doc, const std::string& name);
+
+// Fills a rectangle [x0, x1) x [y0, y1) with ppc x ppc points per cell of the grid lattice
+// (points at sub-cell centres), for bodies built in code (tests, benchmarks).
+Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
+                         double rho0, double vx, double vy, std::uint8_t body);
+
+}  // namespace smpm
