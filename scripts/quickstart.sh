@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Fresh Debian machine to first results: install what is missing, build Release, run
+# cases/quickstart.toml, say where the results are.
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+BUILD_TARGET=shockmpm source "$ROOT/scripts/setup.sh"
+cd "$ROOT"
+"$BUILD_DIR/shockmpm" run cases/quickstart.toml --out out/quickstart "$@"
+echo "open out/quickstart/fields/particles.xdmf in ParaView; series in out/quickstart/*.csv, run summary in out/quickstart/run.json"
