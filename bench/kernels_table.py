@@ -126,20 +126,17 @@ def main(paths):
     if keys:
         print()
         kw = max(len(k) for k in keys + ["P2G <shape>/N"])
-        head = f"{'P2G <shape>/N':<{kw}}"
-        for t in threads:
-            head += f" | col/atom {t}thr"
-        for t in threads:
-            head += f" | col/ser {t}thr"
+        cols = [(other, t, f"col/{abbr} {t}thr")
+                for other, abbr in (("Atomic", "atom"), ("Serial", "ser")) for t in threads]
+        head = f"{'P2G <shape>/N':<{kw}}" + "".join(f" | {label}" for _, _, label in cols)
         print(head)
         print("-" * len(head))
         for k in keys:
             row = f"{k:<{kw}}"
-            for other, width in (("Atomic", 14), ("Serial", 13)):
-                for t in threads:
-                    c = data[t].get("BM_P2G_Colored" + k, (None,))[0]
-                    o = data[t].get(f"BM_P2G_{other}" + k, (None,))[0]
-                    row += f" | {c / o:>{width}.2f}" if c and o else f" | {'-':>{width}}"
+            for other, t, label in cols:
+                c = data[t].get("BM_P2G_Colored" + k, (None,))[0]
+                o = data[t].get(f"BM_P2G_{other}" + k, (None,))[0]
+                row += f" | {c / o:>{len(label)}.2f}" if c and o else f" | {'-':>{len(label)}}"
             print(row)
 
     if errors:
