@@ -5,6 +5,7 @@
 #include <unordered_map>
 
 #include "engine/case_reader.hpp"
+#include "kernels/transfer.hpp"
 
 namespace smpm {
 
@@ -110,7 +111,7 @@ Scene build_scene(const toml::table& doc, const std::string& name) {
       throw CaseError("case key 'grid.y_range': height " + std::to_string(y1 - y0) +
                       " m is not a whole number of cells of 'grid.cell_size' " + std::to_string(h) + " m");
     s.geom.periodic_x = r.boolean("periodic_x", false);
-    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, 64, 8));
+    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 8));
     if (s.geom.periodic_x && s.geom.nx < 4)
       throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
                       std::to_string(s.geom.nx));

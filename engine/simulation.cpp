@@ -30,7 +30,8 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       body_material_(std::move(body_material)),
       P_(std::move(particles)),
       grid_(geom, cfg.transfer == Transfer::FLIP) {
-  if (geom.tile < 4) throw std::invalid_argument("grid tile width must be >= 4 cells");
+  if (geom.tile < 4 || geom.tile > kern::kMaxTile)
+    throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
   const std::size_t n = P_.size();
   P_.enable_affine(cfg_.transfer == Transfer::APIC);
   // ids name particles in messages and snapshots: their order as given

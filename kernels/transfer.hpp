@@ -4,6 +4,7 @@
 // never in the particle body.
 #pragma once
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 
 #include "views.hpp"
@@ -13,6 +14,13 @@ namespace smpm::kern {
 enum class P2GWhat { All, Momentum };  // All: mass, momentum, internal force. Momentum: MUSL remap.
 enum class G2PWhat { Full, Velocity, PositionGradient };  // Full: USL. MUSL: Velocity, then the rest.
 
+// Where a particle's contributions go. The particle body (p2g_particle) is the same for every
+// sink; the sink decides how a node is addressed and how a value is added.
+//  - GridSink<PlainAdd>: straight into the grid arrays (serial reference, and nothing else
+//    writes at the same time).
+//  - GridSink<AtomicAdd>: into the grid arrays with atomic adds (comparison only).
+//  - TileSink: into a small node-major scratch block covering one tile's stencil footprint,
+//    which stays in L1; the colored scatter flushes it to the grid after the tile.
 struct PlainAdd {
   static inline void add(double& a, double v) { a += v; }
 };
@@ -23,9 +31,46 @@ struct AtomicAdd {
   }
 };
 
+template <class Add>
+struct GridSink {
+  const GridGeom& g;
+  const GridView& G;
+  std::size_t row(int i, int j) const { return g.node(i, j); }
+  inline void add_momentum(std::size_t n, double qx, double qy) const {
+    Add::add(G.px[n], qx);
+    Add::add(G.py[n], qy);
+  }
+  inline void add_mass_force(std::size_t n, double m, double fx, double fy) const {
+    Add::add(G.m[n], m);
+    Add::add(G.fx[n], fx);
+    Add::add(G.fy[n], fy);
+  }
+};
+
+// Largest tile width the scratch block is sized for (grid.tile_cells is checked against it).
+inline constexpr int kMaxTile = 16;
+// Nodes a tile's particles reach: cells c in [t0, t0 + tile) touch nodes c - 1 .. c + 2
+// (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
+inline constexpr int tile_span(int tile) { return tile + 3; }
+
+struct TileSink {
+  double* s;  // 5 values per node: m, px, py, fx, fy
+  int i0, j0, span;
+  std::size_t row(int i, int j) const { return static_cast<std::size_t>((j - j0) * span + (i - i0)); }
+  inline void add_momentum(std::size_t n, double qx, double qy) const {
+    s[5 * n + 1] += qx;
+    s[5 * n + 2] += qy;
+  }
+  inline void add_mass_force(std::size_t n, double m, double fx, double fy) const {
+    s[5 * n + 0] += m;
+    s[5 * n + 3] += fx;
+    s[5 * n + 4] += fy;
+  }
+};
+
 // Scatter of one particle p. APIC adds the affine momentum m C (x_i - x_p).
-template <class Shape, bool APIC, P2GWhat What, class Add = PlainAdd>
-inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::uint32_t p,
+template <class Shape, bool APIC, P2GWhat What, class Sink>
+inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView& P, std::uint32_t p,
                          double lp) {
   constexpr int N = Shape::N;
   const double inv_h = 1.0 / g.h;
@@ -48,7 +93,7 @@ inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleVie
     vsxy = -Vh * P.sxy[p];
   }
   for (int b = 0; b < N; ++b) {
-    const std::size_t row = g.node(bx, by + b);
+    const std::size_t row = sink.row(bx, by + b);
     const double dy = (by + b) - yg;
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
@@ -59,57 +104,81 @@ inline void p2g_particle(const GridGeom& g, const GridView& G, const ParticleVie
         qx += mCxx * dx + mCxy * dy;
         qy += mCyx * dx + mCyy * dy;
       }
-      Add::add(G.px[n], w * qx);
-      Add::add(G.py[n], w * qy);
+      sink.add_momentum(n, w * qx, w * qy);
       if constexpr (What == P2GWhat::All) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
-        Add::add(G.m[n], w * m);
-        Add::add(G.fx[n], vsxx * gx + vsxy * gy);
-        Add::add(G.fy[n], vsxy * gx + vsyy * gy);
+        sink.add_mass_force(n, w * m, vsxx * gx + vsxy * gy, vsxy * gx + vsyy * gy);
       }
     }
   }
 }
 
-// Scatter of the particles at sorted positions [s0, s1).
-template <class Shape, bool APIC, P2GWhat What, class Add = PlainAdd>
-inline void p2g_range(const GridGeom& g, const GridView& G, const ParticleView& P,
-                      const std::uint32_t* order, std::size_t s0, std::size_t s1, double lp) {
-  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What, Add>(g, G, P, order[s], lp);
+// Scatter of the particles at sorted positions [s0, s1) into a sink.
+template <class Shape, bool APIC, P2GWhat What, class Sink>
+inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P, const std::uint32_t* order,
+                      std::size_t s0, std::size_t s1, double lp) {
+  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What>(g, sink, P, order[s], lp);
 }
 
 // Colored scatter: tiles of one color (tile parity in x and y) touch disjoint nodes
 // (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
-// one after another. Fixed tile order and fixed particle order within a tile make every
+// one after another. Each tile accumulates into an L1-resident scratch block, then adds the
+// block to the grid. Fixed tile order and fixed particle order within a tile make every
 // node's sum independent of the thread count.
 template <class Shape, bool APIC, P2GWhat What>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
   const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
+  const int span = tile_span(g.tile);
 #pragma omp parallel
-  for (int color = 0; color < 4; ++color) {
-    const int cx = color & 1, cy = color >> 1;
-    const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
+  {
+    alignas(64) double scratch[5 * tile_span(kMaxTile) * tile_span(kMaxTile)];
+    for (int color = 0; color < 4; ++color) {
+      const int cx = color & 1, cy = color >> 1;
+      const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
 #pragma omp for schedule(dynamic, 1)
-    for (int k = 0; k < ntx * nty; ++k) {
-      const int tx = cx + 2 * (k % ntx), ty = cy + 2 * (k / ntx);
-      const std::size_t t = static_cast<std::size_t>(ty) * TX + tx;
-      p2g_range<Shape, APIC, What>(g, G, P, order, cell_start[t * cpt], cell_start[(t + 1) * cpt], lp);
+      for (int k = 0; k < ntx * nty; ++k) {
+        const int tx = cx + 2 * (k % ntx), ty = cy + 2 * (k / ntx);
+        const std::size_t t = static_cast<std::size_t>(ty) * TX + tx;
+        const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
+        if (s0 == s1) continue;
+        const TileSink sink{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
+        std::fill(scratch, scratch + 5 * span * span, 0.0);
+        p2g_range<Shape, APIC, What>(g, sink, P, order, s0, s1, lp);
+        // flush, clipped to the node storage (a partial last tile's block reaches past it)
+        const int jn = std::min(span, g.ny + g.pad - sink.j0 + 1);
+        const int in = std::min(span, g.nx + g.pad - sink.i0 + 1);
+        for (int jj = 0; jj < jn; ++jj) {
+          const std::size_t row = g.node(sink.i0, sink.j0 + jj);
+          const double* sr = scratch + 5 * jj * span;
+          for (int ii = 0; ii < in; ++ii) {
+            G.px[row + ii] += sr[5 * ii + 1];
+            G.py[row + ii] += sr[5 * ii + 2];
+            if constexpr (What == P2GWhat::All) {
+              G.m[row + ii] += sr[5 * ii + 0];
+              G.fx[row + ii] += sr[5 * ii + 3];
+              G.fy[row + ii] += sr[5 * ii + 4];
+            }
+          }
+        }
+      }
     }
   }
 }
 
-// Reference scatters for tests and benchmarks.
+// Reference scatters for tests and benchmarks: one thread into the grid, or all threads with
+// atomic adds.
 template <class Shape, bool APIC, P2GWhat What>
 void p2g_serial(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                 std::size_t n, double lp) {
-  p2g_range<Shape, APIC, What>(g, G, P, order, 0, n, lp);
+  p2g_range<Shape, APIC, What>(g, GridSink<PlainAdd>{g, G}, P, order, 0, n, lp);
 }
 template <class Shape, bool APIC, P2GWhat What>
 void p2g_atomic(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                 std::size_t n, double lp) {
+  const GridSink<AtomicAdd> sink{g, G};
 #pragma omp parallel for schedule(static)
-  for (std::size_t s = 0; s < n; ++s) p2g_particle<Shape, APIC, What, AtomicAdd>(g, G, P, order[s], lp);
+  for (std::size_t s = 0; s < n; ++s) p2g_particle<Shape, APIC, What>(g, sink, P, order[s], lp);
 }
 
 struct G2PParams {
