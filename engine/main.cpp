@@ -29,7 +29,8 @@ int main(int argc, char** argv) {
   try {
     auto doc = smpm::parse_case_file(case_file);
     smpm::apply_overrides(doc, sets);
-    smpm::Scene scene = smpm::build_scene(doc, std::filesystem::path(case_file).stem().string());
+    const std::filesystem::path path(case_file);
+    smpm::Scene scene = smpm::build_scene(doc, path.stem().string(), path.parent_path());
     if (check->parsed()) {
       std::cout << smpm::describe_scene(scene);
       return 0;

@@ -11,8 +11,8 @@ void for_each_double(Particles& P, F&& f) {
   for (auto* v : {&P.x, &P.y, &P.vx, &P.vy, &P.m, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Lxx, &P.Lxy,
                   &P.Lyx, &P.Lyy})
     f(*v);
-  if (!P.Cxx.empty())
-    for (auto* v : {&P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy}) f(*v);
+  for (auto* v : {&P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy, &P.e, &P.epsp, &P.q, &P.wp})
+    if (!v->empty()) f(*v);
 }
 }  // namespace
 
@@ -20,6 +20,14 @@ void Particles::resize(std::size_t n) {
   for_each_double(*this, [n](std::vector<double>& v) { v.resize(n, 0.0); });
   id.resize(n, 0);
   body.resize(n, 0);
+}
+
+void Particles::enable(std::vector<double>& field, std::size_t n, bool on) {
+  if (on) {
+    if (field.size() != n) field.assign(n, 0.0);
+  } else {
+    std::vector<double>().swap(field);
+  }
 }
 
 void Particles::enable_affine(bool on) {
@@ -32,7 +40,7 @@ void Particles::enable_affine(bool on) {
 kern::ParticleView Particles::view() {
   auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
   return {x.data(), y.data(), vx.data(), vy.data(), m.data(), V.data(), sxx.data(), syy.data(), sxy.data(),
-          p.data(), Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data(), d(Cxx), d(Cxy), d(Cyx), d(Cyy)};
+          p.data(), Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data(), d(Cxx), d(Cxy), d(Cyx), d(Cyy), d(q), d(e)};
 }
 
 void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su) {
@@ -62,6 +70,7 @@ void Particles::append(const Particles& o) {
   cat(sxx, o.sxx); cat(syy, o.syy); cat(sxy, o.sxy); cat(p, o.p);
   cat(Lxx, o.Lxx); cat(Lxy, o.Lxy); cat(Lyx, o.Lyx); cat(Lyy, o.Lyy);
   cat(Cxx, o.Cxx); cat(Cxy, o.Cxy); cat(Cyx, o.Cyx); cat(Cyy, o.Cyy);
+  cat(e, o.e); cat(epsp, o.epsp); cat(q, o.q); cat(wp, o.wp);
   cat(id, o.id); cat(body, o.body);
 }
 

@@ -21,12 +21,18 @@ struct Particles {
   std::vector<double> Lxx, Lxy, Lyx, Lyy;  // velocity gradient [1/s]
   // Optional: sized 0 unless the scene needs them.
   std::vector<double> Cxx, Cxy, Cyx, Cyy;  // APIC affine matrix [1/s]
+  std::vector<double> e;      // specific internal energy [J/kg] (energy-dependent EOS)
+  std::vector<double> epsp;   // equivalent plastic strain [-] (plastic strength)
+  std::vector<double> q;      // artificial viscous pressure [Pa] (artificial viscosity on)
+  std::vector<double> wp;     // plastic work per mass [J/kg] (heat fraction below 1)
   std::vector<std::uint32_t> id;  // original index, permuted along with the rest
   std::vector<std::uint8_t> body; // body index
 
   std::size_t size() const { return x.size(); }
   void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)
   void enable_affine(bool on);  // allocate (zeroed) or release the APIC matrix
+  // allocate (zeroed) or release one optional scalar field
+  static void enable(std::vector<double>& field, std::size_t n, bool on);
   kern::ParticleView view();
   // Physically reorders every array so that array order becomes `order` (sorted order).
   void permute(const std::uint32_t* order, std::vector<double>& scratch_d,

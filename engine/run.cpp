@@ -11,7 +11,9 @@
 #include <iostream>
 #include <sstream>
 
+#include "engine/diagnostics.hpp"
 #include "engine/output.hpp"
+#include "engine/thermo.hpp"
 
 namespace smpm {
 
@@ -28,7 +30,7 @@ std::string hms(double s) {
   return b;
 }
 
-std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
+std::vector<SnapshotField> snapshot_fields(const Simulation& sim, const std::vector<Thermo>& thermo) {
   const Particles& P = sim.particles();
   const std::size_t n = P.size();
   std::vector<SnapshotField> f;
@@ -53,6 +55,15 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
   scal("stress_yy", "Pa", [&](std::size_t i) { return P.syy[i] - P.p[i]; });
   scal("stress_xy", "Pa", [&](std::size_t i) { return P.sxy[i]; });
   scal("stress_zz", "Pa", [&](std::size_t i) { return -(P.sxx[i] + P.syy[i]) - P.p[i]; });
+  if (!P.e.empty()) {
+    scal("energy", "J/kg", [&](std::size_t i) { return P.e[i]; });
+    scal("temperature", "K", [&](std::size_t i) {
+      const int k = sim.body_material()[P.body[i]];
+      return particle_temperature(P, i, thermo[k], sim.materials()[k]);
+    });
+  }
+  if (!P.epsp.empty()) scal("plastic_strain", "1", [&](std::size_t i) { return P.epsp[i]; });
+  if (!P.q.empty()) scal("viscous_pressure", "Pa", [&](std::size_t i) { return P.q[i]; });
   scal("body", "1", [&](std::size_t i) { return double(P.body[i]); });
   scal("id", "1", [&](std::size_t i) { return double(P.id[i]); });
   return f;
@@ -125,7 +136,28 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     c << scene.resolved << "\n";
   }
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
+  std::vector<Thermo> thermo;
+  for (const auto& m : scene.materials) thermo.emplace_back(m);
   SnapshotWriter snaps(out / "fields");
+  auto snapshot = [&] {
+    snaps.write(snapshot_fields(sim, thermo), sim.particles().size(), sim.time(), sim.steps());
+  };
+  // the compression front runs through the target: the body named "target", else body 0
+  std::size_t target = 0;
+  for (std::size_t b = 0; b < scene.bodies.size(); ++b)
+    if (scene.bodies[b].name == "target") target = b;
+  const double vy0 = scene.bodies[target].vy0;
+  std::ofstream front;
+  if (vy0 != 0.0) {
+    front.open(out / "front.csv");
+    front << "time_ns,front_y_um\n" << std::setprecision(10);
+  }
+  auto write_front = [&] {
+    if (vy0 == 0.0) return;
+    const auto& g = scene.geom;
+    const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
+    if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
+  };
   std::ofstream energy(out / "energy.csv");
   energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m\n";
   energy << std::setprecision(12);
@@ -155,10 +187,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   double particle_steps = 0.0;
   const double n = static_cast<double>(sim.particles().size());
   try {
-    snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+    snapshot();
     next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
     write_energy();
-    next_energy = scene.run.energy_interval;
+    next_energy = scene.run.diagnostics_interval;
     while (sim.time() < t_end - eps) {
       if (g_interrupted) {
         s.status = "interrupted";
@@ -176,10 +208,11 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
         wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
       if (sim.time() >= next_energy - eps) {
         write_energy();
-        next_energy = sim.time() + scene.run.energy_interval;
+        write_front();
+        next_energy = sim.time() + scene.run.diagnostics_interval;
       }
       if (sim.time() >= next_snap - eps && sim.time() < t_end - eps) {
-        snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+        snapshot();
         next_snap += scene.run.snapshot_interval;
       }
       const double now = omp_get_wtime();
@@ -206,7 +239,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
   // final state, whatever happened
   write_energy();
-  snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+  snapshot();
   write_run_json(out / "run.json", scene, sim, s, threads);
   if (!opt.quiet) {
     std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",

@@ -1,6 +1,7 @@
 #include "engine/scene.hpp"
 
 #include <cmath>
+#include <optional>
 #include <limits>
 #include <unordered_map>
 
@@ -22,15 +23,50 @@ kern::Wall wall_kind(const std::string& s) {
 Material read_material(CaseReader r, const std::string& name) {
   Material m;
   m.name = name;
-  r.choice("eos", eos_names(), "linear");
-  r.choice("strength", strength_names(), "elastic");
-  m.eos = EosKind::Linear;
-  m.strength = StrengthKind::Elastic;
+  const std::string eos = r.choice("eos", eos_names(), "linear");
+  const std::string strength = r.choice("strength", strength_names(), "elastic");
+  m.eos = eos == "mie_gruneisen" ? EosKind::MieGruneisen : EosKind::Linear;
+  m.strength = strength == "none" ? StrengthKind::None
+               : strength == "von_mises" ? StrengthKind::VonMises
+                                         : StrengthKind::Elastic;
   m.rho0 = r.quantity("density", kDensity, 1e-6, 1e6);
   m.E = r.quantity("youngs_modulus", kStress, 1e-12, 1e15);
   m.nu = r.number("poisson_ratio", 0.0, 0.499);
+  if (m.eos == EosKind::MieGruneisen) {
+    m.c0 = r.quantity("bulk_sound_speed", kVelocity, 1e-6, 1e6);
+    m.s = r.number("hugoniot_slope", 0.0, 10.0);
+    m.gamma0 = r.number("gruneisen_gamma", 0.0, 10.0);
+  }
+  if (m.strength == StrengthKind::VonMises) {
+    m.Y0 = r.quantity("yield_stress", kStress, 0.0, 1e15);
+    m.H = r.quantity("hardening_modulus", kStress, 0.0, 1e15);
+  }
+  m.cv = r.quantity("specific_heat", kSpecificHeat, 0.0, 1e8, 0.0);
+  m.conductivity = r.quantity("thermal_conductivity", kConductivity, 0.0, 1e6, 0.0);
+  m.T0 = r.quantity("initial_temperature", kTemperature, 0.0, 1e6, 300.0);
+  m.heat_fraction = r.number("heat_fraction", 0.0, 1.0, 1.0);
+  m.temperature = r.choice("temperature", {"isentrope", "simple"}, "isentrope") == "simple"
+                      ? TemperatureKind::Simple
+                      : TemperatureKind::Isentrope;
   r.finish();
   return m;
+}
+
+// The materials library: `materials_file` (relative to the case file), by default the nearest
+// materials.toml in the case file's directory or above it.
+std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem::path& case_dir) {
+  if (top.has("materials_file")) {
+    const auto p = case_dir / top.string("materials_file");
+    if (!std::filesystem::exists(p))
+      throw CaseError("case key 'materials_file': '" + p.string() + "' does not exist");
+    return p;
+  }
+  for (auto d = std::filesystem::absolute(case_dir); !d.empty(); d = d.parent_path()) {
+    if (std::filesystem::exists(d / "materials.toml")) return d / "materials.toml";
+    if (d == d.parent_path()) break;
+  }
+  throw CaseError("a material names a 'base' but no materials.toml was found next to or above the case file; "
+                  "set the top-level key 'materials_file'");
 }
 
 // Lattice of sub-cell centres: point (a, b) at (x0 + (a + 0.5) d, y0 + (b + 0.5) d), d = h / ppc.
@@ -77,7 +113,7 @@ Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1,
                       [&](double x, double y) { return x >= x0 && x < x1 && y >= y0 && y < y1; });
 }
 
-Scene build_scene(const toml::table& doc, const std::string& name) {
+Scene build_scene(const toml::table& doc, const std::string& name, const std::filesystem::path& case_dir) {
   Scene s;
   s.name = name;
   CaseReader top(doc, "", s.resolved);
@@ -87,7 +123,7 @@ Scene build_scene(const toml::table& doc, const std::string& name) {
     CaseReader r = top.table("run");
     s.run.end_time = r.quantity("end_time", kTime, 0.0, kInf);
     s.run.snapshot_interval = r.quantity("snapshot_interval", kTime, 0.0, kInf, 0.0);
-    s.run.energy_interval = r.quantity("energy_interval", kTime, 0.0, kInf, 0.0);
+    s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
     s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
     s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
     r.finish();
@@ -132,6 +168,9 @@ Scene build_scene(const toml::table& doc, const std::string& name) {
     s.solver.cfl = r.number("cfl", 1e-6, 1.0, 0.4);
     s.solver.fixed_dt = r.quantity("dt", kTime, 0.0, kInf, 0.0);
     s.solver.permute_every = static_cast<int>(r.integer("permute_every", 0, 1000000, 20));
+    s.solver.artificial_viscosity = r.boolean("artificial_viscosity", false);
+    s.solver.av_linear = r.number("viscosity_linear", 0.0, 10.0, 0.06);
+    s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
     const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
     s.solver.gravity_x = gx;
     s.solver.gravity_y = gy;
@@ -155,10 +194,38 @@ Scene build_scene(const toml::table& doc, const std::string& name) {
     CaseReader r = top.table("materials");
     const toml::table* mt = doc.get_as<toml::table>("materials");
     if (!mt || mt->empty()) throw CaseError("case table [materials] is required: add at least one [materials.NAME]");
+    std::optional<toml::table> library;
+    std::filesystem::path library_path;
     for (const auto& [k, v] : *mt) {
       const std::string mname(k.str());
       mat_index[mname] = static_cast<int>(s.materials.size());
-      s.materials.push_back(read_material(r.table(mname), mname));
+      const toml::table* own = v.as_table();
+      if (!own) throw CaseError("case key 'materials." + mname + "': expected a table [materials." + mname + "]");
+      if (const auto base = own->get_as<std::string>("base")) {
+        // the library entry, then this table's keys on top of it
+        if (!library) {
+          library_path = find_materials_file(top, case_dir);
+          library = parse_case_file(library_path);
+          s.resolved.insert_or_assign("materials_file_used", library_path.string());
+        }
+        const toml::table* entry = library->get_as<toml::table>(base->get());
+        if (!entry) {
+          std::string names;
+          for (const auto& [lk, lv] : *library) names += (names.empty() ? "'" : ", '") + std::string(lk.str()) + "'";
+          throw CaseError("case key 'materials." + mname + ".base': '" + base->get() + "' is not in " +
+                          library_path.string() + "; it has " + names);
+        }
+        toml::table merged = *entry;
+        for (const auto& [ok, ov] : *own)
+          if (ok.str() != "base") merged.insert_or_assign(ok, ov);
+        r.table(mname);  // marks the key read and creates its resolved table
+        toml::table& out = *s.resolved["materials"][mname].as_table();
+        out.insert_or_assign("base", base->get());
+        CaseReader mr(merged, "materials." + mname, out);
+        s.materials.push_back(read_material(mr, mname));
+      } else {
+        s.materials.push_back(read_material(r.table(mname), mname));
+      }
     }
     r.finish();
   }
@@ -216,6 +283,8 @@ Scene build_scene(const toml::table& doc, const std::string& name) {
                           std::to_string(P.x[i]) + ", " + std::to_string(P.y[i]) + ") m");
       }
       info.particles = P.size();
+      info.vx0 = vx;
+      info.vy0 = vy;
       info.area = P.size() * d * d;
       s.body_material.push_back(it->second);
       s.bodies.push_back(info);

@@ -16,7 +16,7 @@ namespace smpm {
 struct RunControl {
   double end_time = 0.0;           // [s]
   double snapshot_interval = 0.0;  // [s]; 0: first and last state only
-  double energy_interval = 0.0;    // [s]; rows of energy.csv (0: every step)
+  double diagnostics_interval = 0.0;  // [s]; rows of energy.csv and front.csv (0: every step)
   double progress_interval = 5.0;  // [s of wall time] between progress lines
   long max_steps = 0;              // 0: no limit
 };
@@ -26,6 +26,7 @@ struct BodyInfo {
   std::string material;
   std::size_t particles = 0;
   double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
+  double vx0 = 0.0, vy0 = 0.0;  // initial velocity [m/s]
 };
 
 struct Scene {
@@ -41,7 +42,8 @@ struct Scene {
 };
 
 // Builds a scene from a parsed case. Throws CaseError with the key, value and allowed range.
-Scene build_scene(const toml::table& doc, const std::string& name);
+// Relative paths in the case (materials_file) are taken from case_dir.
+Scene build_scene(const toml::table& doc, const std::string& name, const std::filesystem::path& case_dir);
 
 // Fills a rectangle [x0, x1) x [y0, y1) with ppc x ppc points per cell of the grid lattice
 // (points at sub-cell centres), for bodies built in code (tests, benchmarks).

@@ -34,6 +34,17 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
     throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
   const std::size_t n = P_.size();
   P_.enable_affine(cfg_.transfer == Transfer::APIC);
+  // optional fields: only what the materials and solver settings need
+  bool energy = false, plastic = false, stored_work = false;
+  for (const auto& m : materials_) {
+    energy = energy || m.needs_energy();
+    plastic = plastic || m.plastic();
+    stored_work = stored_work || (m.plastic() && m.heat_fraction < 1.0);
+  }
+  Particles::enable(P_.e, n, energy);
+  Particles::enable(P_.epsp, n, plastic);
+  Particles::enable(P_.q, n, cfg_.artificial_viscosity);
+  Particles::enable(P_.wp, n, stored_work);
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);
@@ -126,6 +137,10 @@ void Simulation::update_grid() {
   kern::grid_update(g, G, q, row_force_.data());
   double* arrays[] = {G.vx, G.vy, G.dvx, G.dvy};
   kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
+  if (transfer_heat()) {  // the heating gather reads the scatter's momenta
+    double* scatter[] = {G.m, G.px, G.py};
+    kern::fill_periodic_ghosts(g, scatter, 3);
+  }
   WallForces w;
   for (int r = 0; r < g.sy(); ++r) {
     w.left += row_force_[4 * r + 0];
@@ -147,14 +162,17 @@ void Simulation::gather_from_grid() {
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
     using kern::G2PWhat;
+    const bool heat = transfer_heat();
     if (cfg_.scheme == Scheme::USL) {
       if (flip) kern::g2p<S, true, G2PWhat::Full>(g, G, pv, n, q);
+      else if (heat) kern::g2p<S, false, G2PWhat::Full, true>(g, G, pv, n, q);
       else kern::g2p<S, false, G2PWhat::Full>(g, G, pv, n, q);
       return;
     }
     // MUSL: new particle velocities, remap their momentum to the grid, then move the
     // particles and take the velocity gradient from the remapped grid velocity.
     if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
+    else if (heat) kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);
     else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
     kern::clear_grid(g, G, false);
     if (cfg_.transfer == Transfer::APIC)
@@ -177,10 +195,13 @@ void Simulation::update_stress() {
   auto pv = P_.view();
   const std::size_t n = P_.size();
   double vmax = 0.0;
+  auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+  const kern::ConstitutiveState state{opt(P_.e), opt(P_.epsp), opt(P_.q), opt(P_.wp)};
+  const kern::ConstitutiveParams params{dt_, grid_.geom.h, cfg_.av_linear, cfg_.av_quadratic};
   for (std::size_t k = 0; k < materials_.size(); ++k) {
     const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
     const auto r = with_material(materials_[k], [&](const auto& eos, const auto& str) {
-      return kern::constitutive_update(pv, n, dt_, eos, str, sel);
+      return kern::constitutive_update(pv, state, n, params, eos, str, sel);
     });
     check_volume(r.bad);
     vmax = std::max(vmax, r.max_speed);
@@ -206,10 +227,31 @@ std::string Simulation::describe_particle(std::size_t p) const {
 
 Simulation::Energy Simulation::energy() const {
   Energy e;
+  const bool has_e = !P_.e.empty(), apic = !P_.Cxx.empty();
+  const auto& g = grid_.geom;
   for (std::size_t p = 0; p < P_.size(); ++p) {
     e.kinetic += 0.5 * P_.m[p] * (P_.vx[p] * P_.vx[p] + P_.vy[p] * P_.vy[p]);
-    const Material& mat = materials_[body_material_[P_.body[p]]];
-    e.internal += P_.V[p] * mat.strain_energy_density(P_.sxx[p], P_.syy[p], P_.sxy[p], P_.p[p]);
+    if (apic) {  // the affine field's share: 1/2 m sum_ab C_ab^2 D_b
+      double Dx = 0, Dy = 0;
+      kern::with_shape(cfg_.shape, [&](auto shape) {
+        using S = decltype(shape);
+        double w[S::N], dw[S::N];
+        const double xg = (P_.x[p] - g.x0) / g.h, yg = (P_.y[p] - g.y0) / g.h;
+        int b = S::eval(xg, cfg_.ugimp_lp, w, dw);
+        for (int a = 0; a < S::N; ++a) Dx += w[a] * (b + a - xg) * (b + a - xg);
+        b = S::eval(yg, cfg_.ugimp_lp, w, dw);
+        for (int a = 0; a < S::N; ++a) Dy += w[a] * (b + a - yg) * (b + a - yg);
+      });
+      const double h2 = g.h * g.h;
+      e.kinetic += 0.5 * P_.m[p] * h2 *
+                   ((P_.Cxx[p] * P_.Cxx[p] + P_.Cyx[p] * P_.Cyx[p]) * Dx + (P_.Cxy[p] * P_.Cxy[p] + P_.Cyy[p] * P_.Cyy[p]) * Dy);
+    }
+    if (has_e) {
+      e.internal += P_.m[p] * P_.e[p];
+    } else {
+      const Material& mat = materials_[body_material_[P_.body[p]]];
+      e.internal += P_.V[p] * mat.strain_energy_density(P_.sxx[p], P_.syy[p], P_.sxy[p], P_.p[p]);
+    }
   }
   return e;
 }

@@ -30,6 +30,10 @@ struct SolverConfig {
   int permute_every = 20;       // physical permutation of particle arrays every k steps (0: never)
   double gravity_x = 0.0, gravity_y = 0.0;  // [m/s^2]
   kern::Walls walls;
+  // Artificial bulk viscosity q = rho h (c_Q h tr(D)^2 - c_L c tr(D)), compression only.
+  bool artificial_viscosity = false;
+  double av_linear = 0.06;     // c_L
+  double av_quadratic = 1.5;   // c_Q
 };
 
 // A step that cannot go on: a particle left the grid or its volume became non-positive.
@@ -70,8 +74,9 @@ class Simulation {
   const WallForces& wall_forces() const { return wall_; }
   const PhaseTimes& phase_times() const { return times_; }
 
-  // Kinetic and internal (elastic strain) energy [J per metre of thickness]; summed in array
-  // order, so identical for any thread count.
+  // Kinetic and internal energy [J per metre of thickness]: internal is sum m e where the
+  // scene carries e, else the elastic strain energy of the stress. Summed in array order, so
+  // identical for any thread count.
   struct Energy {
     double kinetic = 0, internal = 0;
     double total() const { return kinetic + internal; }
@@ -90,6 +95,9 @@ class Simulation {
   void update_stress();
 
   void check_volume(std::ptrdiff_t bad) const;
+  // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
+  // (see kern::g2p_particle), so total energy is conserved by the transfers.
+  bool transfer_heat() const { return cfg_.transfer == Transfer::APIC && !P_.e.empty(); }
   std::string describe_particle(std::size_t p) const;
 
   SolverConfig cfg_;

@@ -88,8 +88,9 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
   double vsxx = 0, vsyy = 0, vsxy = 0;  // -V sigma / h
   if constexpr (What == P2GWhat::All) {
     const double Vh = P.V[p] * inv_h;
-    vsxx = -Vh * (P.sxx[p] - P.p[p]);
-    vsyy = -Vh * (P.syy[p] - P.p[p]);
+    const double pq = P.q ? P.p[p] + P.q[p] : P.p[p];
+    vsxx = -Vh * (P.sxx[p] - pq);
+    vsyy = -Vh * (P.syy[p] - pq);
     vsxy = -Vh * P.sxy[p];
   }
   for (int b = 0; b < N; ++b) {
@@ -189,7 +190,16 @@ struct G2PParams {
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
 // the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T.
-template <class Shape, bool FLIP, G2PWhat What>
+//
+// Heat (APIC only): both transfers dissipate kinetic energy, and both losses split exactly
+// into per-particle shares (the kinetic energy of a particle counts its affine field,
+// 1/2 m (|v_p|^2 + sum_ab C_ab^2 D_b)):
+//   scatter  1/2 sum_i w_ip |v_p + C_p (x_i - x_p) - v_i^old|^2    (v_i^old = p_i / m_i)
+//   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
+// both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
+// internal energy, so the transfers conserve total energy and the time integration's O(dt)
+// error is what remains. Needs m, px, py of the scatter still on the grid (ghosts filled).
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false>
 inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
   constexpr int N = Shape::N;
@@ -202,6 +212,13 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
+  static_assert(!Heat || kAffine, "transfer heating is defined for the APIC velocity gather");
+  double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
+  double ux = 0, uy = 0, uxx = 0, uxy = 0, uyx = 0, uyy = 0;  // old v_p and C_p h
+  if constexpr (Heat) {
+    ux = P.vx[p]; uy = P.vy[p];
+    uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
+  }
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b);
     const double dy = (by + b) - yg;
@@ -211,6 +228,14 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
       const double gvx = G.vx[n], gvy = G.vy[n];
       vx += w * gvx;
       vy += w * gvy;
+      if constexpr (Heat) {
+        v2 += w * (gvx * gvx + gvy * gvy);
+        const double mi = G.m[n], inv = mi > 0.0 ? 1.0 / mi : 0.0;
+        const double dx = (bx + a) - xg;
+        const double rx = ux + uxx * dx + uxy * dy - G.px[n] * inv;
+        const double ry = uy + uyx * dx + uyy * dy - G.py[n] * inv;
+        r2 += w * (rx * rx + ry * ry);
+      }
       if constexpr (FLIP && What != G2PWhat::PositionGradient) {
         dvx += w * G.dvx[n];
         dvy += w * G.dvy[n];
@@ -228,19 +253,26 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     }
   }
   if constexpr (kAffine) {
-    if constexpr (Shape::apic_gradient) {
-      P.Cxx[p] = lxx * inv_h; P.Cxy[p] = lxy * inv_h;
-      P.Cyx[p] = lyx * inv_h; P.Cyy[p] = lyy * inv_h;
-    } else {  // C = B D^-1, D diagonal for tensor-product shapes
-      double Dx = 0, Dy = 0;
+    // D = sum_i w_i (x_i - x_p)^2 per axis, grid units (diagonal for tensor-product shapes)
+    double Dx = 0, Dy = 0;
+    if constexpr (!Shape::apic_gradient || Heat) {
       for (int a = 0; a < N; ++a) {
         const double ex = (bx + a) - xg, ey = (by + a) - yg;
         Dx += wx[a] * ex * ex;
         Dy += wy[a] * ey * ey;
       }
-      const double ix = inv_h / Dx, iy = inv_h / Dy;
-      P.Cxx[p] = bxx * ix; P.Cxy[p] = bxy * iy;
-      P.Cyx[p] = byx * ix; P.Cyy[p] = byy * iy;
+    }
+    double cxx, cxy, cyx, cyy;  // C in grid units
+    if constexpr (Shape::apic_gradient) {
+      cxx = lxx; cxy = lxy; cyx = lyx; cyy = lyy;
+    } else {
+      cxx = bxx / Dx; cxy = bxy / Dy; cyx = byx / Dx; cyy = byy / Dy;
+    }
+    P.Cxx[p] = cxx * inv_h; P.Cxy[p] = cxy * inv_h;
+    P.Cyx[p] = cyx * inv_h; P.Cyy[p] = cyy * inv_h;
+    if constexpr (Heat) {
+      const double affine = (cxx * cxx + cyx * cyx) * Dx + (cxy * cxy + cyy * cyy) * Dy;
+      P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine);
     }
   }
   if constexpr (What != G2PWhat::PositionGradient) {
@@ -267,10 +299,10 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
 }
 
 // Parallel gather over particles in array order: race-free by construction.
-template <class Shape, bool FLIP, G2PWhat What>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false>
 void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
 #pragma omp parallel for schedule(static)
-  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What>(g, G, P, p, q);
+  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat>(g, G, P, p, q);
 }
 
 }  // namespace smpm::kern

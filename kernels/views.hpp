@@ -54,6 +54,10 @@ struct ParticleView {
   double* Lxx; double* Lxy; double* Lyx; double* Lyy;
   // APIC affine matrix C = B D^-1 (null unless the transfer is APIC).
   double* Cxx; double* Cxy; double* Cyx; double* Cyy;
+  // Artificial viscous pressure, added to p in the internal force (null: no viscosity).
+  const double* q;
+  // Specific internal energy (null when not tracked), heated by the APIC transfer dissipation.
+  double* e;
 };
 
 }  // namespace smpm::kern

@@ -1,0 +1,82 @@
+#include "engine/thermo.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace smpm {
+
+namespace {
+constexpr int kTable = 8192;
+}
+
+Thermo::Thermo(const Material& m) : m_(m) {
+  if (m.eos != EosKind::MieGruneisen) return;  // simple temperature only
+  const auto eos = m.mie_gruneisen();
+  const double V0 = 1.0 / m.rho0;
+  d_ = (kEtaMax - kEtaMin) / (kTable - 1);
+  es_.assign(kTable, 0.0);
+  // de/deta = -P dV/deta = P V0 (V = V0 (1 - eta)); integrate from eta = 0 both ways.
+  auto rhs = [&](double eta, double e) { return eos.pressure(m.rho0 / (1.0 - eta), e) * V0; };
+  const int i0 = static_cast<int>(std::lround(-kEtaMin / d_));
+  const double eta_at_i0 = kEtaMin + i0 * d_;
+  // first step from eta = 0 to the grid point i0 (grid may not contain 0 exactly)
+  auto rk4 = [&](double eta, double e, double h) {
+    const double k1 = rhs(eta, e), k2 = rhs(eta + h / 2, e + h / 2 * k1), k3 = rhs(eta + h / 2, e + h / 2 * k2),
+                 k4 = rhs(eta + h, e + h * k3);
+    return e + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
+  };
+  es_[i0] = rk4(0.0, 0.0, eta_at_i0);
+  for (int i = i0 + 1; i < kTable; ++i) es_[i] = rk4(kEtaMin + (i - 1) * d_, es_[i - 1], d_);
+  for (int i = i0 - 1; i >= 0; --i) es_[i] = rk4(kEtaMin + (i + 1) * d_, es_[i + 1], -d_);
+}
+
+double Thermo::isentrope_energy(double rho) const {
+  if (es_.empty()) return 0.0;
+  const double eta = 1.0 - m_.rho0 / rho;
+  double f = (eta - kEtaMin) / d_;
+  int i = static_cast<int>(std::floor(f));
+  i = std::max(0, std::min(kTable - 2, i));
+  f -= i;
+  return es_[i] + f * (es_[i + 1] - es_[i]);
+}
+
+double Thermo::isentrope_temperature(double rho) const {
+  return m_.T0 * std::exp(m_.gamma0 * (1.0 - m_.rho0 / rho));
+}
+
+double Thermo::temperature(double rho, double e) const {
+  if (m_.cv <= 0.0) return m_.T0;
+  if (m_.temperature == TemperatureKind::Simple || es_.empty()) return m_.T0 + e / m_.cv;
+  return isentrope_temperature(rho) + (e - isentrope_energy(rho)) / m_.cv;
+}
+
+HugoniotState hugoniot(const Material& m, double up) {
+  if (m.eos != EosKind::MieGruneisen) throw std::invalid_argument("hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
+  const auto eos = m.mie_gruneisen();
+  const double V0 = 1.0 / m.rho0;
+  // On the Hugoniot e = P (V0 - V) / 2, so P = cold / (1 - gamma_rho (V0 - V) / 2); up^2 = P (V0 - V).
+  auto state = [&](double rho, double& P) {
+    const double dV = V0 - 1.0 / rho;
+    P = eos.cold(rho) / (1.0 - 0.5 * eos.gamma_rho() * dV);
+    return std::sqrt(std::max(0.0, P * dV));
+  };
+  double lo = m.rho0, hi = m.rho0 * 1.999, P = 0;
+  for (int it = 0; it < 200; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (state(mid, P) < up ? lo : hi) = mid;
+  }
+  HugoniotState h;
+  h.rho = 0.5 * (lo + hi);
+  h.up = state(h.rho, P);
+  h.P = P;
+  h.Us = h.P / (m.rho0 * h.up);
+  h.e = 0.5 * h.P * (V0 - 1.0 / h.rho);
+  const Thermo th(m);
+  Material simple = m;
+  simple.temperature = TemperatureKind::Simple;
+  h.T = th.temperature(h.rho, h.e);
+  h.T_simple = Thermo(simple).temperature(h.rho, h.e);
+  return h;
+}
+
+}  // namespace smpm

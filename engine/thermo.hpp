@@ -1,0 +1,43 @@
+// Temperature from density and specific internal energy, and the Hugoniot of a material,
+// both computed from the code's own EOS part (kern::MieGruneisenEos).
+//
+// Temperature (physics.md section 2). Isentrope-referenced (default): the isentrope through
+// (rho0, T0) has T_s(V) = T0 exp(gamma0 (1 - V/V0)) (rho Gamma constant) and energy e_s(V) from
+// de = -P dV along it, integrated once (RK4, tabulated); then T = T_s(V) + (e - e_s(V)) / cv:
+// cold compression energy is recoverable and does not heat. "simple": T = T0 + e / cv, which
+// counts cold compression energy as heat (about twice the shock heating of dense Al at 1 km/s).
+#pragma once
+#include <vector>
+
+#include "engine/material.hpp"
+
+namespace smpm {
+
+class Thermo {
+ public:
+  explicit Thermo(const Material& m);
+  double temperature(double rho, double e) const;  // [K]
+  double isentrope_energy(double rho) const;        // e_s [J/kg]
+  double isentrope_temperature(double rho) const;   // T_s [K]
+  // Range of the isentrope table in rho/rho0; outside it e_s is extrapolated linearly in eta.
+  static constexpr double kEtaMin = -1.0, kEtaMax = 0.75;  // eta = 1 - rho0/rho
+
+ private:
+  Material m_;
+  std::vector<double> es_;  // e_s at eta = kEtaMin + i d
+  double d_ = 0.0;
+};
+
+// State behind a steady shock with particle-velocity jump up into material at rest at
+// (rho0, e = 0), from the Rankine-Hugoniot relations and the code's EOS.
+struct HugoniotState {
+  double up = 0, Us = 0;   // [m/s]
+  double P = 0;            // [Pa]
+  double rho = 0;          // [kg/m^3]
+  double e = 0;            // [J/kg] = up^2 / 2
+  double T = 0;            // [K], isentrope-referenced
+  double T_simple = 0;     // [K], T0 + e / cv
+};
+HugoniotState hugoniot(const Material& m, double up);
+
+}  // namespace smpm
