@@ -88,7 +88,7 @@ std::pair<std::string, double> CaseReader::find_quantity(const std::string& key,
       factor = f;
     }
   }
-  if (found.empty() && t_->get(key))
+  if (t_->get(key))
     fail(key, "a " + std::string(q.what) + " needs its unit in the key name: one of " + join(names));
   return {found, factor};
 }
@@ -261,6 +261,21 @@ std::vector<CaseReader> CaseReader::tables(const std::string& key) {
     r.emplace_back(*a->get(i)->as_table(), (path_.empty() ? key : path_ + "." + key) + "[" + std::to_string(i) + "]",
                    *oa->get(i)->as_table());
   return r;
+}
+
+bool CaseReader::used(const std::string& key) const {
+  return std::find(used_.begin(), used_.end(), key) != used_.end();
+}
+
+std::string CaseReader::stem(const std::string& key) {
+  for (const Quantity* q : {&kLength, &kTime, &kVelocity, &kStress, &kDensity, &kAcceleration, &kSpecificHeat,
+                            &kConductivity, &kTemperature})
+    for (const auto& [suf, f] : q->suffixes) {
+      const std::string tail = std::string("_") + suf;
+      if (key.size() > tail.size() && key.compare(key.size() - tail.size(), tail.size(), tail) == 0)
+        return key.substr(0, key.size() - tail.size());
+    }
+  return key;
 }
 
 void CaseReader::finish() const {

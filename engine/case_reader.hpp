@@ -55,6 +55,9 @@ class CaseReader {
   std::vector<CaseReader> tables(const std::string& key);
   // Throws CaseError for keys present but never read.
   void finish() const;
+  bool used(const std::string& key) const;  // was this exact key read?
+  // The key without a unit suffix ("yield_stress_MPa" -> "yield_stress").
+  static std::string stem(const std::string& key);
   const std::string& path() const { return path_; }
 
  private:

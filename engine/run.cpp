@@ -30,7 +30,8 @@ std::string hms(double s) {
   return b;
 }
 
-std::vector<SnapshotField> snapshot_fields(const Simulation& sim, const std::vector<Thermo>& thermo) {
+std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
+  const auto& thermo = sim.thermo();
   const Particles& P = sim.particles();
   const std::size_t n = P.size();
   std::vector<SnapshotField> f;
@@ -86,7 +87,7 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   t.insert("resident_bytes", static_cast<int64_t>(sim.bytes()));
   const auto& pt = sim.phase_times();
   t.insert("phase_seconds", toml::table{{"sort", pt.sort}, {"p2g", pt.p2g}, {"grid", pt.grid}, {"g2p", pt.g2p},
-                                        {"constitutive", pt.constitutive}});
+                                        {"constitutive", pt.constitutive}, {"heat", pt.heat}});
   toml::array bodies;
   for (const auto& b : scene.bodies)
     bodies.push_back(toml::table{{"name", b.name}, {"material", b.material},
@@ -136,12 +137,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     c << scene.resolved << "\n";
   }
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
-  std::vector<Thermo> thermo;
-  for (const auto& m : scene.materials) thermo.emplace_back(m);
   SnapshotWriter snaps(out / "fields");
-  auto snapshot = [&] {
-    snaps.write(snapshot_fields(sim, thermo), sim.particles().size(), sim.time(), sim.steps());
-  };
+  auto snapshot = [&] { snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps()); };
   // the compression front runs through the target: the body named "target", else body 0
   std::size_t target = 0;
   for (std::size_t b = 0; b < scene.bodies.size(); ++b)

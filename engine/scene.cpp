@@ -20,7 +20,9 @@ kern::Wall wall_kind(const std::string& s) {
   return kern::Wall::None;
 }
 
-Material read_material(CaseReader r, const std::string& name) {
+// Reads a material; with `check_only` set, only those keys must all be read (a library entry
+// may carry keys the case's model choice does not use).
+Material read_material(CaseReader r, const std::string& name, const toml::table* check_only = nullptr) {
   Material m;
   m.name = name;
   const std::string eos = r.choice("eos", eos_names(), "linear");
@@ -48,7 +50,16 @@ Material read_material(CaseReader r, const std::string& name) {
   m.temperature = r.choice("temperature", {"isentrope", "simple"}, "isentrope") == "simple"
                       ? TemperatureKind::Simple
                       : TemperatureKind::Isentrope;
-  r.finish();
+  if (!check_only) {
+    r.finish();
+  } else {
+    for (const auto& [k, v] : *check_only) {
+      const std::string key(k.str());
+      if (key != "base" && !r.used(key))
+        throw CaseError("case key '" + r.path() + "." + key + "' is not used by this material (eos '" +
+                        eos + "', strength '" + strength + "'); check the spelling or remove it");
+    }
+  }
   return m;
 }
 
@@ -171,6 +182,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.solver.artificial_viscosity = r.boolean("artificial_viscosity", false);
     s.solver.av_linear = r.number("viscosity_linear", 0.0, 10.0, 0.06);
     s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
+    s.solver.heat_conduction = r.boolean("heat_conduction", false);
     const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
     s.solver.gravity_x = gx;
     s.solver.gravity_y = gy;
@@ -201,6 +213,8 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       mat_index[mname] = static_cast<int>(s.materials.size());
       const toml::table* own = v.as_table();
       if (!own) throw CaseError("case key 'materials." + mname + "': expected a table [materials." + mname + "]");
+      if (own->contains("base") && !own->get_as<std::string>("base"))
+        throw CaseError("case key 'materials." + mname + ".base': expected the name of a library entry in quotes");
       if (const auto base = own->get_as<std::string>("base")) {
         // the library entry, then this table's keys on top of it
         if (!library) {
@@ -215,14 +229,22 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
           throw CaseError("case key 'materials." + mname + ".base': '" + base->get() + "' is not in " +
                           library_path.string() + "; it has " + names);
         }
+        // this table's keys replace the library's, whatever unit they are given in
         toml::table merged = *entry;
-        for (const auto& [ok, ov] : *own)
-          if (ok.str() != "base") merged.insert_or_assign(ok, ov);
+        for (const auto& [ok, ov] : *own) {
+          const std::string key(ok.str());
+          if (key == "base") continue;
+          std::vector<std::string> drop;
+          for (const auto& [lk, lv] : merged)
+            if (CaseReader::stem(std::string(lk.str())) == CaseReader::stem(key)) drop.emplace_back(lk.str());
+          for (const auto& d : drop) merged.erase(d);
+          merged.insert_or_assign(ok, ov);
+        }
         r.table(mname);  // marks the key read and creates its resolved table
         toml::table& out = *s.resolved["materials"][mname].as_table();
         out.insert_or_assign("base", base->get());
         CaseReader mr(merged, "materials." + mname, out);
-        s.materials.push_back(read_material(mr, mname));
+        s.materials.push_back(read_material(mr, mname, own));
       } else {
         s.materials.push_back(read_material(r.table(mname), mname));
       }

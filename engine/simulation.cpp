@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
 
@@ -41,7 +42,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
     plastic = plastic || m.plastic();
     stored_work = stored_work || (m.plastic() && m.heat_fraction < 1.0);
   }
-  Particles::enable(P_.e, n, energy);
+  Particles::enable(P_.e, n, energy || cfg_.heat_conduction);
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
@@ -55,6 +56,31 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
+  for (const auto& m : materials_) thermo_.emplace_back(m);
+  if (cfg_.heat_conduction) {
+    // one conductivity for the scene; nodes with less than half a cell of the lightest
+    // material's full mass carry no heat (kernels/heat.hpp), which bounds the explicit step
+    cv_body_.assign(256, 0.0);
+    double cmin = std::numeric_limits<double>::infinity();
+    for (std::size_t b = 0; b < body_material_.size(); ++b) {
+      const Material& m = materials_[body_material_[b]];
+      if (m.cv <= 0.0 || m.conductivity <= 0.0)
+        throw std::invalid_argument("heat conduction needs specific_heat and thermal_conductivity > 0 for material " + m.name);
+      if (conductivity_ > 0.0 && m.conductivity != conductivity_)
+        throw std::invalid_argument("heat conduction: all materials must share one thermal_conductivity");
+      conductivity_ = m.conductivity;
+      cv_body_[b] = m.cv;
+      cmin = std::min(cmin, 0.5 * m.rho0 * geom.h * geom.h * m.cv);
+    }
+    heat_cmin_ = cmin;
+    heat_dt_ = 0.9 * cmin / (4.0 * conductivity_);
+    for (auto* a : {&heat_cap_, &heat_capT_, &heat_T_, &heat_dT_}) a->assign(geom.num_nodes(), 0.0);
+    // relaxation of sub-cell temperature structure (kernels/heat.hpp): time 10 h^2 / alpha
+    double alpha = 0.0;
+    for (const auto& m : materials_) alpha = std::max(alpha, m.conductivity / (m.rho0 * m.cv));
+    heat_relax_rate_ = alpha / (10.0 * geom.h * geom.h);
+    T_.assign(n, 0.0);
+  }
   double mmax = 0.0;
   for (double m : P_.m) mmax = std::max(mmax, m);
   mass_eps_ = 1e-9 * mmax;
@@ -71,7 +97,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
 
 double Simulation::stable_dt() const {
   if (cfg_.fixed_dt > 0.0) return cfg_.fixed_dt;
-  return cfg_.cfl * grid_.geom.h / max_speed_;
+  return std::min(cfg_.cfl * grid_.geom.h / max_speed_, heat_dt_);
 }
 
 void Simulation::step(double dt_max) {
@@ -80,7 +106,8 @@ void Simulation::step(double dt_max) {
   scatter_to_grid();    // P2G: mass, momentum, internal force (colored, atomic-free)
   update_grid();        // momentum update with gravity, walls
   gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap)
-  update_stress();      // volume, stress, pressure; signal speed for the next dt
+  update_stress();      // volume, stress, pressure, energy; signal speed for the next dt
+  if (cfg_.heat_conduction) conduct_heat();  // grid conduction, heat back to the particles
   time_ += dt_;
   last_dt_ = dt_;
   ++steps_;
@@ -207,6 +234,34 @@ void Simulation::update_stress() {
     vmax = std::max(vmax, r.max_speed);
   }
   max_speed_ = vmax;
+}
+
+void Simulation::conduct_heat() {
+  Timed t(times_.heat);
+  const auto& g = grid_.geom;
+  const std::size_t n = P_.size();
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) {
+    const int k = body_material_[P_.body[p]];
+    T_[p] = thermo_[k].temperature(P_.m[p] / P_.V[p], P_.e[p]);
+  }
+  const kern::HeatGrid H{heat_cap_.data(), heat_capT_.data(), heat_T_.data(), heat_dT_.data()};
+  const kern::HeatParticles hp{P_.x.data(), P_.y.data(), P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(),
+                               P_.e.data()};
+  std::fill(heat_cap_.begin(), heat_cap_.end(), 0.0);
+  std::fill(heat_capT_.begin(), heat_capT_.end(), 0.0);
+  // the particles moved in this step: bin them again for the scatter
+  const auto bad = kern::compute_keys(g, P_.x.data(), P_.y.data(), n, key_.data());
+  if (bad >= 0) throw StepError("particle left the grid: " + describe_particle(static_cast<std::size_t>(bad)));
+  kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
+  kern::with_shape(cfg_.shape, [&](auto shape) {
+    using S = decltype(shape);
+    kern::heat_scatter<S>(g, H, hp, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
+    double* arrays[] = {H.cap, H.capT};
+    kern::fold_periodic(g, arrays, 2);
+    kern::heat_conduct(g, H, conductivity_, heat_cmin_, dt_);
+    kern::heat_gather<S>(g, H, hp, n, cfg_.ugimp_lp, std::min(1.0, heat_relax_rate_ * dt_));
+  });
 }
 
 void Simulation::check_volume(std::ptrdiff_t bad) const {

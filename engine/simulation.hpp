@@ -11,6 +11,7 @@
 #include "engine/grid.hpp"
 #include "engine/material.hpp"
 #include "engine/particles.hpp"
+#include "engine/thermo.hpp"
 #include "kernels/grid_update.hpp"
 #include "kernels/shape.hpp"
 
@@ -34,6 +35,8 @@ struct SolverConfig {
   bool artificial_viscosity = false;
   double av_linear = 0.06;     // c_L
   double av_quadratic = 1.5;   // c_Q
+  // Heat conduction on the grid (kernels/heat.hpp); its explicit limit is folded into dt.
+  bool heat_conduction = false;
 };
 
 // A step that cannot go on: a particle left the grid or its volume became non-positive.
@@ -48,8 +51,8 @@ struct WallForces {
 
 // Wall-clock seconds spent in each phase, summed over steps.
 struct PhaseTimes {
-  double sort = 0, p2g = 0, grid = 0, g2p = 0, constitutive = 0;
-  double total() const { return sort + p2g + grid + g2p + constitutive; }
+  double sort = 0, p2g = 0, grid = 0, g2p = 0, constitutive = 0, heat = 0;
+  double total() const { return sort + p2g + grid + g2p + constitutive + heat; }
 };
 
 class Simulation {
@@ -64,7 +67,9 @@ class Simulation {
   double time() const { return time_; }
   long steps() const { return steps_; }
   double last_dt() const { return last_dt_; }
-  double stable_dt() const;  // the CFL step the next step() would take
+  double stable_dt() const;  // the step the next step() would take: CFL, heat conduction limit
+  double heat_dt() const { return heat_dt_; }  // explicit conduction limit [s] (inf when off)
+  const std::vector<Thermo>& thermo() const { return thermo_; }
   const Particles& particles() const { return P_; }
   Particles& particles() { return P_; }
   const Grid& grid() const { return grid_; }
@@ -93,6 +98,7 @@ class Simulation {
   void update_grid();
   void gather_from_grid();
   void update_stress();
+  void conduct_heat();
 
   void check_volume(std::ptrdiff_t bad) const;
   // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
@@ -112,6 +118,11 @@ class Simulation {
   std::vector<double> row_force_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
 
+  // heat conduction
+  std::vector<Thermo> thermo_;
+  std::vector<double> heat_cap_, heat_capT_, heat_T_, heat_dT_, T_, cv_body_;
+  double conductivity_ = 0.0, heat_cmin_ = 0.0, heat_relax_rate_ = 0.0;
+  double heat_dt_ = std::numeric_limits<double>::infinity();
   double mass_eps_ = 0.0;  // grid nodes lighter than this get no force (see GridUpdateParams)
   double time_ = 0.0, dt_ = 0.0, last_dt_ = 0.0, max_speed_ = 0.0;
   long steps_ = 0;

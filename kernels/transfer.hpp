@@ -121,19 +121,25 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
   for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What>(g, sink, P, order[s], lp);
 }
 
-// Colored scatter: tiles of one color (tile parity in x and y) touch disjoint nodes
-// (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
-// one after another. Each tile accumulates into an L1-resident scratch block, then adds the
-// block to the grid. Fixed tile order and fixed particle order within a tile make every
-// node's sum independent of the thread count.
-template <class Shape, bool APIC, P2GWhat What>
-void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
-                 const std::uint32_t* cell_start, double lp) {
+// Colored iteration over tiles: tiles of one color (tile parity in x and y) touch disjoint
+// nodes (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
+// one after another. Each tile accumulates K values per node into an L1-resident scratch block
+// covering its footprint (body(block, s0, s1) for the particles at sorted positions [s0, s1)),
+// then the block is handed node by node to flush(values, grid_node), clipped to the node
+// storage (a partial last tile's block reaches past it). Fixed tile order and fixed particle
+// order within a tile make every node's sum independent of the thread count.
+struct TileBlock {
+  double* s;
+  int i0, j0, span;
+};
+
+template <int K, class Body, class Flush>
+void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush) {
   const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
 #pragma omp parallel
   {
-    alignas(64) double scratch[5 * tile_span(kMaxTile) * tile_span(kMaxTile)];
+    alignas(64) double scratch[K * tile_span(kMaxTile) * tile_span(kMaxTile)];
     for (int color = 0; color < 4; ++color) {
       const int cx = color & 1, cy = color >> 1;
       const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
@@ -143,28 +149,39 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
         const std::size_t t = static_cast<std::size_t>(ty) * TX + tx;
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
         if (s0 == s1) continue;
-        const TileSink sink{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
-        std::fill(scratch, scratch + 5 * span * span, 0.0);
-        p2g_range<Shape, APIC, What>(g, sink, P, order, s0, s1, lp);
-        // flush, clipped to the node storage (a partial last tile's block reaches past it)
-        const int jn = std::min(span, g.ny + g.pad - sink.j0 + 1);
-        const int in = std::min(span, g.nx + g.pad - sink.i0 + 1);
+        const TileBlock blk{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
+        std::fill(scratch, scratch + K * span * span, 0.0);
+        body(blk, s0, s1);
+        const int jn = std::min(span, g.ny + g.pad - blk.j0 + 1);
+        const int in = std::min(span, g.nx + g.pad - blk.i0 + 1);
         for (int jj = 0; jj < jn; ++jj) {
-          const std::size_t row = g.node(sink.i0, sink.j0 + jj);
-          const double* sr = scratch + 5 * jj * span;
-          for (int ii = 0; ii < in; ++ii) {
-            G.px[row + ii] += sr[5 * ii + 1];
-            G.py[row + ii] += sr[5 * ii + 2];
-            if constexpr (What == P2GWhat::All) {
-              G.m[row + ii] += sr[5 * ii + 0];
-              G.fx[row + ii] += sr[5 * ii + 3];
-              G.fy[row + ii] += sr[5 * ii + 4];
-            }
-          }
+          const std::size_t row = g.node(blk.i0, blk.j0 + jj);
+          const double* sr = scratch + K * jj * span;
+          for (int ii = 0; ii < in; ++ii) flush(sr + K * ii, row + ii);
         }
       }
     }
   }
+}
+
+// Colored scatter of mass, momentum and internal force (or momentum only).
+template <class Shape, bool APIC, P2GWhat What>
+void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
+                 const std::uint32_t* cell_start, double lp) {
+  for_each_tile_colored<5>(
+      g, cell_start,
+      [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
+        p2g_range<Shape, APIC, What>(g, TileSink{b.s, b.i0, b.j0, b.span}, P, order, s0, s1, lp);
+      },
+      [&](const double* v, std::size_t n) {
+        G.px[n] += v[1];
+        G.py[n] += v[2];
+        if constexpr (What == P2GWhat::All) {
+          G.m[n] += v[0];
+          G.fx[n] += v[3];
+          G.fy[n] += v[4];
+        }
+      });
 }
 
 // Reference scatters for tests and benchmarks: one thread into the grid, or all threads with
