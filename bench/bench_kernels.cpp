@@ -7,6 +7,7 @@
 //   BM_GridUpdate<shape>/N            grid_update (+ fill_periodic_ghosts, a no-op here)
 //   BM_G2P<shape>/N                   g2p<shape, PIC/APIC, Full>
 //   BM_Step<shape>/N                  smpm::Simulation::step() (elastic, APIC, USL, CFL dt)
+//   BM_StepShock<shape>/N             the same with the full shock physics (MG, J2, AV, heating)
 // shape in {linear, ugimp, quadratic, cubic}; N = particles (4 per cell, ppc = 2).
 // Select with --benchmark_filter, e.g. --benchmark_filter='P2G.*<quadratic>/65536'.
 //
@@ -54,6 +55,23 @@ Material bench_material() {  // aluminium-like, linear elastic
   m.rho0 = 2700.0;
   m.E = 70e9;
   m.nu = 0.3;
+  return m;
+}
+
+// The study's aluminium: Mie-Grueneisen EOS, von Mises with hardening (cases/materials.toml).
+Material shock_material() {
+  Material m = bench_material();
+  m.name = "aluminium";
+  m.eos = EosKind::MieGruneisen;
+  m.strength = StrengthKind::VonMises;
+  m.E = 69e9;
+  m.nu = 0.33;
+  m.c0 = 5350.0;
+  m.s = 1.34;
+  m.gamma0 = 2.0;
+  m.Y0 = 120e6;
+  m.H = 384e6;
+  m.cv = 880.0;
   return m;
 }
 
@@ -339,23 +357,30 @@ StepTemplate& step_template(std::size_t n) {
   return *s;
 }
 
-template <class S>
+// Elastic: linear EOS + elastic deviator. Shock: the full shock physics of a study run
+// (Mie-Grueneisen, J2 radial return, artificial viscosity, energy equation with the
+// transfer-dissipation heating of the APIC gather).
+enum class Physics { Elastic, Shock };
+
+template <class S, Physics Ph = Physics::Elastic>
 std::unique_ptr<Simulation> make_simulation(const StepTemplate& t) {
   SolverConfig cfg;
+  if constexpr (Ph == Physics::Shock) cfg.artificial_viscosity = true;
   cfg.shape = shape_kind<S>();
   cfg.ugimp_lp = kLp;
   cfg.transfer = Transfer::APIC;
   cfg.scheme = Scheme::USL;
   cfg.cfl = kCfl;
   cfg.walls = slip_box();
-  return std::make_unique<Simulation>(t.g, cfg, std::vector<Material>{bench_material()}, std::vector<int>{0}, t.P);
+  const Material m = Ph == Physics::Shock ? shock_material() : bench_material();
+  return std::make_unique<Simulation>(t.g, cfg, std::vector<Material>{m}, std::vector<int>{0}, t.P);
 }
 
 // Timed steps follow one untimed warm-up step, so the first timed step is not step 0: the
 // engine permutes the particle arrays on steps 0, 20, 40, ... (permute_every = 20) and its
 // first step also faults in the scratch arrays. Runs of >= 20 iterations thus include the
 // permutation at the engine's rate; shorter runs (large N) mostly exclude it.
-template <class S>
+template <class S, Physics Ph = Physics::Elastic>
 void BM_Step(benchmark::State& state) {
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   StepTemplate& t = step_template(n);
@@ -374,7 +399,7 @@ void BM_Step(benchmark::State& state) {
       add(done, sim->phase_times(), 1.0);
       add(done, base, -1.0);
     }
-    sim = make_simulation<S>(t);
+    sim = make_simulation<S, Ph>(t);
     try {
       sim->step();
     } catch (const StepError& e) {
@@ -435,6 +460,7 @@ void register_shape(const std::string& family) {
     reg("BM_G2P" + sh, BM_G2P<S>);
   } else if (family == "step") {
     reg("BM_Step" + sh, BM_Step<S>);
+    reg("BM_StepShock" + sh, BM_Step<S, Physics::Shock>);
   }
 }
 
