@@ -89,9 +89,21 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   t.insert("phase_seconds", toml::table{{"sort", pt.sort}, {"p2g", pt.p2g}, {"grid", pt.grid}, {"g2p", pt.g2p},
                                         {"constitutive", pt.constitutive}, {"heat", pt.heat}});
   toml::array bodies;
-  for (const auto& b : scene.bodies)
-    bodies.push_back(toml::table{{"name", b.name}, {"material", b.material},
-                                 {"particles", static_cast<int64_t>(b.particles)}, {"area_m2", b.area}});
+  for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
+    const auto& b = scene.bodies[k];
+    toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
+                   {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}};
+    const Material& m = scene.materials[scene.body_material[k]];
+    const double up = std::hypot(b.vx0, b.vy0);
+    if (m.eos == EosKind::MieGruneisen && up > 0.0) {
+      // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
+      const auto h = hugoniot(m, up);
+      bt.insert("dense_hugoniot", toml::table{{"up_m_s", h.up}, {"Us_m_s", h.Us}, {"P_Pa", h.P},
+                                              {"rho_kg_m3", h.rho}, {"e_J_kg", h.e}, {"T_K", h.T},
+                                              {"T_simple_K", h.T_simple}});
+    }
+    bodies.push_back(std::move(bt));
+  }
   t.insert("bodies", std::move(bodies));
   t.insert("case_resolved", scene.resolved);
   const auto tmp = file.string() + ".tmp";
@@ -121,6 +133,15 @@ std::string describe_scene(const Scene& sc) {
   o << "time step       " << dt * 1e9 << " ns (" << (sc.solver.fixed_dt > 0 ? "fixed" : "CFL at t = 0") << ")\n";
   o << "end time        " << sc.run.end_time * 1e9 << " ns, about " << std::llround(std::ceil(sc.run.end_time / dt))
     << " steps\n";
+  for (std::size_t k = 0; k < sc.bodies.size(); ++k) {
+    const auto& b = sc.bodies[k];
+    const Material& m = sc.materials[sc.body_material[k]];
+    const double up = std::hypot(b.vx0, b.vy0);
+    if (m.eos != EosKind::MieGruneisen || up <= 0.0) continue;
+    const auto h = hugoniot(m, up);
+    o << "  " << b.name << " stopped from " << up << " m/s (dense Hugoniot): Us " << h.Us << " m/s, P "
+      << h.P * 1e-9 << " GPa, rho " << h.rho << " kg/m^3, T " << h.T << " K (T0 + e/cv: " << h.T_simple << " K)\n";
+  }
   o << "memory          " << std::fixed << std::setprecision(1) << sim.bytes() / 1048576.0 << " MiB resident ("
     << std::setprecision(0) << double(sim.particles().bytes()) / std::max<std::size_t>(1, sc.particles.size())
     << " bytes per particle)\n";

@@ -1,0 +1,96 @@
+// Case files and failure handling: errors name the key, the value and the allowed range; a
+// run that cannot go on stops with a message naming the particle, step and position.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "engine/case_reader.hpp"
+#include "engine/run.hpp"
+#include "engine/scene.hpp"
+
+using namespace smpm;
+
+namespace {
+
+const char* kCase = R"(
+[run]
+end_time_ns = 20.0
+
+[grid]
+cell_size_um = 5.0
+x_range_um = [0.0, 40.0]
+y_range_um = [0.0, 100.0]
+periodic_x = true
+
+[walls]
+bottom = "slip"
+
+[materials.al]
+density_kg_m3 = 2700.0
+youngs_modulus_GPa = 69.0
+poisson_ratio = 0.33
+
+[[bodies]]
+name = "target"
+material = "al"
+x_range_um = [0.0, 40.0]
+y_range_um = [0.0, 50.0]
+velocity_m_s = [0.0, -100.0]
+)";
+
+std::string error_of(const std::vector<std::string>& sets) {
+  auto doc = toml::parse(kCase);
+  try {
+    apply_overrides(doc, sets);
+    build_scene(doc, "t", ".");
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+}  // namespace
+
+TEST_CASE("case errors name the key, the value and the allowed range", "[case]") {
+  CHECK(error_of({}) == "");
+  const auto cfl = error_of({"solver.cfl=2.5"});
+  CHECK(has(cfl, "solver.cfl"));
+  CHECK(has(cfl, "2.5"));
+  CHECK(has(cfl, "allowed 1e-06 to 1"));
+  CHECK(has(error_of({"solver.shape=\"quintic\""}), "'quintic' is not a valid choice: allowed 'linear', 'ugimp', 'quadratic', 'cubic'"));
+  CHECK(has(error_of({"grid.cell_size=5.0"}), "needs its unit in the key name"));
+  CHECK(has(error_of({"grid.cell_size_m=5e-6"}), "given twice"));
+  CHECK(has(error_of({"solver.cfll=0.3"}), "unknown key 'cfll' in [solver]"));
+  CHECK(has(error_of({"grid.x_range_um=[10.0, 0.0]"}), "the first value must be below the second"));
+  CHECK(has(error_of({"grid.cell_size_um=3.0"}), "not a whole number of cells"));
+  CHECK(has(error_of({"solver.cfl"}), "expected section.key=value"));
+  CHECK(has(error_of({"walls.left=\"slip\""}), "periodic_x = true has no left or right wall"));
+  CHECK(has(error_of({"grid.tile_cells=32"}), "allowed 4 to 16"));
+  CHECK(has(error_of({"solver.scheme=musl"}), "not valid TOML"));
+}
+
+TEST_CASE("a particle whose volume turns non-positive stops the run with a clear message", "[case][failure]") {
+  auto doc = toml::parse(kCase);
+  // a time step 100 times the stable one: the first compression inverts points at the wall
+  apply_overrides(doc, {"solver.dt_ns=50.0", "run.end_time_ns=2000.0"});
+  Scene sc = build_scene(doc, "t", ".");
+  const auto out = std::filesystem::temp_directory_path() / "smpm_test_failure";
+  std::filesystem::remove_all(out);
+  const auto s = run_scene(sc, {out, 0, true});
+  CHECK(s.status == "failed");
+  INFO(s.message);
+  CHECK((has(s.message, "non-positive or NaN volume: particle") || has(s.message, "particle left the grid: particle")));
+  CHECK(has(s.message, "at step"));
+  CHECK(has(s.message, "position ("));
+  // nothing lost: the last state and a run.json that says why
+  CHECK(std::filesystem::exists(out / "fields" / "particles.xdmf"));
+  std::ifstream j(out / "run.json");
+  const std::string json((std::istreambuf_iterator<char>(j)), std::istreambuf_iterator<char>());
+  CHECK(has(json, "\"status\" : \"failed\""));
+  std::filesystem::remove_all(out);
+}
