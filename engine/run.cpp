@@ -92,7 +92,8 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
     const auto& b = scene.bodies[k];
     toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
-                   {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}};
+                   {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}, {"porosity", b.porosity},
+                   {"voids", static_cast<int64_t>(b.voids)}};
     const Material& m = scene.materials[scene.body_material[k]];
     const double up = std::hypot(b.vx0, b.vy0);
     if (m.eos == EosKind::MieGruneisen && up > 0.0) {
@@ -127,7 +128,9 @@ std::string describe_scene(const Scene& sc) {
   o << "particles       " << sc.particles.size() << "\n";
   for (const auto& b : sc.bodies)
     o << "  body " << std::left << std::setw(10) << b.name << std::right << " material " << b.material << ", "
-      << b.particles << " particles, area " << b.area * 1e12 << " um^2\n";
+      << b.particles << " particles, area " << b.area * 1e12 << " um^2"
+      << (b.voids ? ", porosity " + std::to_string(b.porosity) + " (" + std::to_string(b.voids) + " voids)" : "")
+      << "\n";
   Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
   const double dt = sim.stable_dt();
   o << "time step       " << dt * 1e9 << " ns (" << (sc.solver.fixed_dt > 0 ? "fixed" : "CFL at t = 0") << ")\n";

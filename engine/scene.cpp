@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "engine/case_reader.hpp"
+#include "engine/porous.hpp"
 #include "kernels/transfer.hpp"
 
 namespace smpm {
@@ -274,11 +275,47 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         throw CaseError("case key '" + r.path() + ".points_per_cell': " + std::to_string(ppc) +
                         " differs from the first body's " + std::to_string(ppc_all) + "; all bodies share one point lattice");
       ppc_all = ppc;
-      const auto [vx, vy] = r.pair("velocity", kVelocity, false, {0.0, 0.0});
-      const std::string shape = r.choice("shape", {"rectangle", "disk"}, "rectangle");
+      const std::string mirror = r.string("mirror_of", "");
+      long src = -1;
+      if (!mirror.empty()) {
+        std::string names;
+        for (std::size_t k = 0; k < s.bodies.size(); ++k) {
+          if (s.bodies[k].name == mirror) src = static_cast<long>(k);
+          names += (names.empty() ? "'" : ", '") + s.bodies[k].name + "'";
+        }
+        if (src < 0)
+          throw CaseError("case key '" + r.path() + ".mirror_of': '" + mirror + "' is not a body defined before this one" +
+                          (names.empty() ? std::string() : "; defined: " + names));
+        if (s.bodies[src].material != info.material)
+          throw CaseError("case key '" + r.path() + ".material': a mirror copy has the material of '" + mirror + "' ('" +
+                          s.bodies[src].material + "')");
+      }
+      const auto [vx, vy] = src >= 0 ? r.pair("velocity", kVelocity, false, {s.bodies[src].vx0, -s.bodies[src].vy0})
+                                     : r.pair("velocity", kVelocity, false, {0.0, 0.0});
       Particles P;
       double bx0, bx1, by0, by1;
-      if (shape == "rectangle") {
+      if (src >= 0) {
+        // mirror image of an earlier body about y = mirror_plane_y (default: its lower edge)
+        const BodyInfo& sb = s.bodies[src];
+        const double plane = r.quantity("mirror_plane_y", kLength, -kInf, kInf, sb.y0);
+        Particles S;
+        std::size_t first = 0;
+        for (std::size_t k = 0; k < static_cast<std::size_t>(src); ++k) first += s.bodies[k].particles;
+        S.resize(sb.particles);
+        for (std::size_t i = 0; i < sb.particles; ++i) {
+          const std::size_t j = first + i;
+          S.x[i] = s.particles.x[j]; S.y[i] = s.particles.y[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
+        }
+        P = mirror_y(S, plane);
+        for (std::size_t i = 0; i < P.size(); ++i) {
+          P.vx[i] = vx;
+          P.vy[i] = vy;
+          P.body[i] = static_cast<std::uint8_t>(b);
+        }
+        bx0 = sb.x0; bx1 = sb.x1; by0 = 2 * plane - sb.y1; by1 = 2 * plane - sb.y0;
+        info.porosity = sb.porosity;
+        info.voids = sb.voids;
+      } else if (r.choice("shape", {"rectangle", "disk"}, "rectangle") == "rectangle") {
         std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
         std::tie(by0, by1) = r.pair("y_range", kLength, true);
         P = fill_rectangle(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b));
@@ -289,7 +326,25 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         P = fill_lattice(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b),
                          [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
       }
+      if (src < 0 && r.has("voids")) {
+        // random overlapping circular voids (physics.md section 3)
+        CaseReader v = r.table("voids");
+        VoidSpec spec;
+        spec.radius = v.quantity("radius", kLength, 1e-12, kInf);
+        spec.radius_spread = v.quantity("radius_spread", kLength, 0.0, spec.radius * (1 - 1e-12), 0.0);
+        if (v.has("porosity") == v.has("count"))
+          throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target) and 'count' (number of voids)");
+        if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
+        else spec.count = v.integer("count", 0, 100000000);
+        spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
+        v.finish();
+        const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
+        const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, bx0, bx1, by0, by1, spec, period);
+        info.porosity = res.porosity;
+        info.voids = res.voids;
+      }
       r.finish();
+      info.x0 = bx0; info.x1 = bx1; info.y0 = by0; info.y1 = by1;
       const double gx1 = s.geom.x0 + s.geom.length_x(), gy1 = s.geom.y0 + s.geom.length_y();
       if (bx0 < s.geom.x0 || bx1 > gx1 || by0 < s.geom.y0 || by1 > gy1)
         throw CaseError("case body '" + r.path() + "' (" + info.name + ") extends outside the grid [" +

@@ -27,6 +27,9 @@ struct BodyInfo {
   std::size_t particles = 0;
   double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
   double vx0 = 0.0, vy0 = 0.0;  // initial velocity [m/s]
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bounding rectangle [m]
+  double porosity = 0.0;  // fraction of the dense body's points removed by voids
+  long voids = 0;
 };
 
 struct Scene {

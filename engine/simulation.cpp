@@ -52,7 +52,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   order_.resize(n);
   cell_start_.resize(geom.num_keys() + 1);
   hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
-  row_force_.assign(4 * static_cast<std::size_t>(geom.sy()), 0.0);
+  row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.sy()), 0.0);
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
@@ -170,10 +170,11 @@ void Simulation::update_grid() {
   }
   WallForces w;
   for (int r = 0; r < g.sy(); ++r) {
-    w.left += row_force_[4 * r + 0];
-    w.right += row_force_[4 * r + 1];
-    w.bottom += row_force_[4 * r + 2];
-    w.top += row_force_[4 * r + 3];
+    const double* rf = &row_force_[kern::kRowSlots * r];
+    w.left += rf[0];
+    w.right += rf[1];
+    w.bottom += rf[2];
+    w.top += rf[3];
   }
   wall_ = w;
 }
@@ -185,6 +186,12 @@ void Simulation::gather_from_grid() {
   auto pv = P_.view();
   const std::size_t n = P_.size();
   kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha};
+  // walls: the largest double below the far edge keeps a clamped point inside the grid
+  using kern::Wall;
+  if (cfg_.walls.left != Wall::None) q.xmin = g.x0;
+  if (cfg_.walls.right != Wall::None) q.xmax = std::nextafter(g.x0 + g.length_x(), g.x0);
+  if (cfg_.walls.bottom != Wall::None) q.ymin = g.y0;
+  if (cfg_.walls.top != Wall::None) q.ymax = std::nextafter(g.y0 + g.length_y(), g.y0);
   const bool flip = cfg_.transfer == Transfer::FLIP;
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);

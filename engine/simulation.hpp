@@ -18,6 +18,8 @@
 namespace smpm {
 
 enum class Transfer { APIC, FLIP };
+// USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
+// updated particles.
 enum class Scheme { USL, MUSL };
 
 struct SolverConfig {
@@ -82,6 +84,7 @@ class Simulation {
   // Kinetic and internal energy [J per metre of thickness]: internal is sum m e where the
   // scene carries e, else the elastic strain energy of the stress. Summed in array order, so
   // identical for any thread count.
+  // A fixed rigid wall does no work, so kinetic plus internal energy is what is conserved.
   struct Energy {
     double kinetic = 0, internal = 0;
     double total() const { return kinetic + internal; }

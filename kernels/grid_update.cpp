@@ -60,7 +60,7 @@ void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < sy; ++r) {
     const int j = r - g.pad;
-    double rf[4] = {0, 0, 0, 0};
+    double rf[kRowSlots] = {0, 0, 0, 0};
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
       const double m = G.m[n];
@@ -87,7 +87,7 @@ void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q
       }
     }
     if (row_force)
-      for (int k = 0; k < 4; ++k) row_force[4 * r + k] = rf[k];
+      for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * r + k] = rf[k];
   }
 }
 

@@ -26,8 +26,9 @@ struct GridUpdateParams {
 };
 
 // Reaction of each wall on the material, summed per storage row so that the total is
-// formed in a fixed order (deterministic for any thread count). row_force has 4 * sy()
-// entries: [left x, right x, bottom y, top y] per row; the caller sums them.
+// formed in a fixed order (deterministic for any thread count). row_force has kRowSlots * sy()
+// entries per call: [left x, right x, bottom y, top y] per row; the caller sums them.
+inline constexpr int kRowSlots = 4;
 void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q, double* row_force);
 
 // MUSL remap: velocity = momentum / mass, walls applied, no forces.

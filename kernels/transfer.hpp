@@ -203,6 +203,10 @@ struct G2PParams {
   double dt = 0.0;
   double lp = 0.25;          // uGIMP half particle width, grid units
   double flip_alpha = 0.0;   // FLIP fraction (FLIP transfers only)
+  // Rigid walls are impenetrable: a point moved past one is put back on it. (With B-splines a
+  // point in the first cell also feels nodes inside the material and can overshoot the wall
+  // by a fraction of dt |v|.) -inf / +inf where there is no wall.
+  double xmin = -1e300, xmax = 1e300, ymin = -1e300, ymax = 1e300;
 };
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
@@ -308,8 +312,8 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
       if (x < g.x0) x += L;
       if (x >= g.x0 + L) x -= L;  // also catches x + L rounding up to x0 + L
     }
-    P.x[p] = x;
-    P.y[p] += q.dt * vy;
+    P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
+    P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
     P.Lxx[p] = lxx * inv_h; P.Lxy[p] = lxy * inv_h;
     P.Lyx[p] = lyx * inv_h; P.Lyy[p] = lyy * inv_h;
   }

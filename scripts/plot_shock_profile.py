@@ -1,4 +1,4 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Pressure, density and temperature profiles along y of a dense-impact run against the exact
 Hugoniot plateau and shock position (docs/verification.md).
 

@@ -5,8 +5,10 @@
 #   CMAKE_ARGS   extra cmake arguments
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# C++ build, plus Debian's Python 3 with numpy, h5py and matplotlib for the figure scripts
+# (run them with /usr/bin/python3: a python3 earlier on PATH may lack these modules).
 PACKAGES=(g++ cmake make pkg-config libeigen3-dev libhdf5-dev catch2 libbenchmark-dev
-          libtomlplusplus-dev libcli11-dev)
+          libtomlplusplus-dev libcli11-dev python3 python3-numpy python3-h5py python3-matplotlib)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,0 +1,35 @@
+// Porous samples (physics.md section 3): random overlapping circular voids cut from a dense
+// lattice of points. Void centres are uniform in the body's rectangle; every point within a
+// void's radius is removed; voids may overlap. The porosity is the fraction of points removed.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/particles.hpp"
+
+namespace smpm {
+
+struct VoidSpec {
+  double radius = 0.0;         // mean void radius [m]
+  double radius_spread = 0.0;  // radii uniform in [radius - spread, radius + spread] [m]
+  double porosity = -1.0;      // target porosity: voids are added until it is reached, or
+  long count = -1;             // a fixed number of voids
+  std::uint64_t seed = 1;      // same seed, same sample (generation is serial)
+};
+
+struct PorousResult {
+  long voids = 0;
+  double porosity = 0.0;  // achieved: removed points / points of the dense body
+};
+
+// Cuts voids from the points of P: one body on the lattice of spacing d whose points sit at
+// (ox + (a + 1/2) d, oy + (b + 1/2) d), inside [x0, x1) x [y0, y1). With `period` > 0 distances
+// in x wrap with that period (periodic sides), so voids cross the side boundaries. P is
+// compacted in place, keeping the order of the rest.
+PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1,
+                       const VoidSpec& spec, double period);
+
+// Mirror image of P about the line y = y_plane (for the symmetric two-body collision).
+Particles mirror_y(const Particles& P, double y_plane);
+
+}  // namespace smpm
