@@ -81,13 +81,13 @@ BarResult bar(kern::ShapeKind shape, double h, Scheme scheme, Transfer transfer)
 TEST_CASE("axial vibration of an elastic bar: period and amplitude", "[verification][elastic]") {
   SECTION("linear hat, h = L / 25") {
     const auto r = bar(kern::ShapeKind::Linear, 1.0, Scheme::USL, Transfer::APIC);
-    INFO("period " << r.period << " amplitude " << r.amplitude);
+    WARN("period " << r.period << " amplitude " << r.amplitude);
     CHECK(r.period == Approx(10.0).epsilon(0.01));
     CHECK(r.amplitude == Approx(0.1 * 2 / M_PI).epsilon(0.02));
   }
   SECTION("quadratic B-spline, h = L / 50") {
     const auto r = bar(kern::ShapeKind::Quadratic, 0.5, Scheme::USL, Transfer::APIC);
-    INFO("period " << r.period << " amplitude " << r.amplitude);
+    WARN("period " << r.period << " amplitude " << r.amplitude);
     CHECK(r.period == Approx(10.0).epsilon(0.01));
     CHECK(r.amplitude == Approx(0.1 * 2 / M_PI).epsilon(0.02));
   }
@@ -137,7 +137,7 @@ TEST_CASE("two colliding elastic disks conserve energy", "[verification][elastic
       emax = std::max(emax, e.total());
       kmin = std::min(kmin, e.kinetic);
     }
-    INFO("scheme " << int(scheme) << ", h " << h << ": E0 " << E0 << " min " << emin << " max " << emax << " min kinetic " << kmin);
+    WARN("scheme " << int(scheme) << ", h " << h << ": E0 " << E0 << " min " << emin << " max " << emax << " min kinetic " << kmin);
     CHECK(kmin < 0.5 * E0);  // the disks did collide: most kinetic energy went into strain energy
     CHECK(emin > 0.97 * E0);
     CHECK(emax < 1.03 * E0);

@@ -48,7 +48,7 @@ TEST_CASE("porosity of a study-sized sample within 0.01 of the target", "[porous
     const Scene s = sample(target, 7);
     const double dense = 1e6;  // points of the dense sample
     const double achieved = 1.0 - s.particles.size() / dense;
-    INFO("target " << target << " achieved " << achieved << " with " << s.bodies[0].voids << " voids");
+    WARN("target " << target << " achieved " << achieved << " with " << s.bodies[0].voids << " voids");
     CHECK(std::fabs(achieved - target) < 0.01);
     CHECK(s.bodies[0].porosity == Approx(achieved).margin(1e-12));  // what run.json reports
     // Boolean model of overlapping discs: porosity 1 - exp(-N pi r^2 / A) for N voids
@@ -98,7 +98,7 @@ TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verificat
     finite = finite && std::isfinite(P.p[i]) && std::isfinite(P.e[i]) && std::isfinite(P.x[i]) && P.V[i] > 0;
     Tmax = std::max(Tmax, sim.thermo()[0].temperature(P.m[i] / P.V[i], P.e[i]));
   }
-  INFO("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
+  WARN("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
   CHECK(finite);
   // Kinetic + internal energy drifts down by 4 % over 100 ns here (the dense impact: 0.06 %).
   // The loss does not change with cfl (0.3 and 0.15 give -4.0 %), so it is not the USL step's
