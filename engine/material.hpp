@@ -25,6 +25,9 @@ struct Material {
   double c0 = 0.0;      // bulk sound speed [m/s]
   double s = 0.0;       // Hugoniot slope dUs/dup [-]
   double gamma0 = 0.0;  // Grueneisen gamma at rho0 [-]
+  // Tension limit (spall): a point whose pressure would fall below -spall_strength has
+  // fractured: no pressure and no deviatoric stress until it is compressed again. 0: none.
+  double spall_strength = 0.0;  // [Pa]
   // von Mises
   double Y0 = 0.0;      // initial yield stress [Pa]
   double H = 0.0;       // linear hardening modulus [Pa]: Y = Y0 + H eps_p

@@ -44,6 +44,7 @@ Material read_material(CaseReader r, const std::string& name, const toml::table*
     m.Y0 = r.quantity("yield_stress", kStress, 0.0, 1e15);
     m.H = r.quantity("hardening_modulus", kStress, 0.0, 1e15);
   }
+  m.spall_strength = r.quantity("spall_strength", kStress, 0.0, 1e15, 0.0);
   m.cv = r.quantity("specific_heat", kSpecificHeat, 0.0, 1e8, 0.0);
   m.conductivity = r.quantity("thermal_conductivity", kConductivity, 0.0, 1e6, 0.0);
   m.T0 = r.quantity("initial_temperature", kTemperature, 0.0, 1e6, 300.0);

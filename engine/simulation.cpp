@@ -231,9 +231,10 @@ void Simulation::update_stress() {
   double vmax = 0.0;
   auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
   const kern::ConstitutiveState state{opt(P_.e), opt(P_.epsp), opt(P_.q), opt(P_.wp)};
-  const kern::ConstitutiveParams params{dt_, grid_.geom.h, cfg_.av_linear, cfg_.av_quadratic};
+  kern::ConstitutiveParams params{dt_, -1e300, grid_.geom.h, cfg_.av_linear, cfg_.av_quadratic};
   for (std::size_t k = 0; k < materials_.size(); ++k) {
     const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
+    params.p_min = materials_[k].spall_strength > 0.0 ? -materials_[k].spall_strength : -1e300;
     const auto r = with_material(materials_[k], [&](const auto& eos, const auto& str) {
       return kern::constitutive_update(pv, state, n, params, eos, str, sel);
     });

@@ -138,6 +138,7 @@ struct ConstitutiveState {
 
 struct ConstitutiveParams {
   double dt = 0.0;
+  double p_min = -1e300;      // tension cutoff [Pa]: below it the point has fractured (see below)
   double av_length = 0.0;     // l [m], the cell size
   double av_linear = 0.0;     // c_L
   double av_quadratic = 0.0;  // c_Q
@@ -193,17 +194,31 @@ ConstitutiveResult constitutive_update(const ParticleView& P, const Constitutive
       S.q[p] = qv;
     }
     double Pn;
+    double e_old = 0.0, w_dev = 0.0;  // for the energy of a point that fractures
+    const double dV = V - V0;
     if (S.e) {
       // deviatoric work (time-centred stress, mid-step volume), then the centred pressure work
       const double sD = 0.5 * ((a0 + P.sxx[p]) * lxx + (b0 + P.syy[p]) * lyy + 2.0 * (c0 + P.sxy[p]) * dxy);
-      const double dV = V - V0;
       const double cold = eos.cold(rho);
-      const double e = (S.e[p] + (dt * 0.5 * (V0 + V) * sD - (0.5 * (P0 + cold) + qv) * dV) / m) /
-                       (1.0 + 0.5 * eos.gamma_rho() * dV / m);
+      e_old = S.e[p];
+      w_dev = dt * 0.5 * (V0 + V) * sD;
+      const double e = (e_old + (w_dev - (0.5 * (P0 + cold) + qv) * dV) / m) / (1.0 + 0.5 * eos.gamma_rho() * dV / m);
       S.e[p] = e;
       Pn = cold + eos.gamma_rho() * e;
     } else {
       Pn = eos.pressure(rho, 0.0);
+    }
+    if (Pn < q.p_min) {
+      // fractured (spall): carries neither tension nor shear from now on; its energy takes the
+      // work of the pressure it actually had (new pressure 0). The elastic shear energy held in
+      // the deviator is released (lost): energy.csv shows it.
+      Pn = 0.0;
+      if (S.e) S.e[p] = e_old + (w_dev - (0.5 * P0 + qv) * dV) / m;
+      P.sxx[p] = P.syy[p] = P.sxy[p] = 0.0;
+      const double c = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
+      P.p[p] = Pn;
+      vmax = std::max(vmax, c + std::sqrt(P.vx[p] * P.vx[p] + P.vy[p] * P.vy[p]) + qspeed);
+      continue;
     }
     P.p[p] = Pn;
     vmax = std::max(vmax, signal_speed(eos, str, rho, Pn, P.vx[p], P.vy[p]) + qspeed);
