@@ -10,22 +10,34 @@ struct Grid {
   kern::GridGeom geom;
   std::vector<double> m, px, py, fx, fy, vx, vy, dvx, dvy;
 
+  std::vector<double> gmx, gmy, vol;  // contact: mass gradient and volume per field
+  int fields = 1;
+
   Grid() = default;
-  Grid(const kern::GridGeom& g, bool flip) : geom(g) {
-    const auto nn = g.num_nodes();
+  // fields = 2: multi-body contact, every array holds one block per velocity field.
+  Grid(const kern::GridGeom& g, bool flip, int nfields = 1) : geom(g), fields(nfields) {
+    const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields);
     for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy}) a->assign(nn, 0.0);
     if (flip) {  // FLIP increments only where the transfer needs them
       dvx.assign(nn, 0.0);
       dvy.assign(nn, 0.0);
     }
+    if (nfields > 1)
+      for (auto* a : {&gmx, &gmy, &vol}) a->assign(nn, 0.0);
   }
   kern::GridView view() {
-    return {m.data(),  px.data(), py.data(), fx.data(), fy.data(), vx.data(), vy.data(),
-            dvx.empty() ? nullptr : dvx.data(), dvy.empty() ? nullptr : dvy.data()};
+    auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+    kern::GridView G{m.data(), px.data(), py.data(), fx.data(), fy.data(), vx.data(), vy.data(), d(dvx), d(dvy)};
+    G.gmx = d(gmx);
+    G.gmy = d(gmy);
+    G.vol = d(vol);
+    G.fields = fields;
+    G.fstride = fields > 1 ? geom.num_nodes() : 0;
+    return G;
   }
   std::size_t bytes() const {
     std::size_t b = 0;
-    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy}) b += a->capacity() * sizeof(double);
+    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy, &gmx, &gmy, &vol}) b += a->capacity() * sizeof(double);
     return b;
   }
 };

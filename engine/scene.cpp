@@ -202,6 +202,16 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
     r.finish();
   }
+  // [contact]
+  {
+    CaseReader r = top.table("contact");
+    s.solver.contact = r.choice("mode", {"single_field", "multi_field"}, "single_field") == "multi_field";
+    s.solver.friction = r.number("friction", 0.0, 10.0, 0.0);
+    s.solver.contact_volume_fraction = r.number("volume_fraction", 0.0, 2.0, 1.0);
+    if (s.solver.contact && s.solver.scheme != Scheme::USL)
+      throw CaseError("case key 'contact.mode': 'multi_field' runs with solver.scheme = \"usl\" only");
+    r.finish();
+  }
   // [materials.NAME]
   std::unordered_map<std::string, int> mat_index;
   {
@@ -347,7 +357,8 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       r.finish();
       info.x0 = bx0; info.x1 = bx1; info.y0 = by0; info.y1 = by1;
       const double gx1 = s.geom.x0 + s.geom.length_x(), gy1 = s.geom.y0 + s.geom.length_y();
-      if (bx0 < s.geom.x0 || bx1 > gx1 || by0 < s.geom.y0 || by1 > gy1)
+      const double tol = 1e-6 * s.geom.h;  // round-off of x0 + n h
+      if (bx0 < s.geom.x0 - tol || bx1 > gx1 + tol || by0 < s.geom.y0 - tol || by1 > gy1 + tol)
         throw CaseError("case body '" + r.path() + "' (" + info.name + ") extends outside the grid [" +
                         std::to_string(s.geom.x0) + ", " + std::to_string(gx1) + "] x [" + std::to_string(s.geom.y0) +
                         ", " + std::to_string(gy1) + "] m");
@@ -369,6 +380,9 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.particles.append(P);
     }
     s.solver.ugimp_lp = 0.5 / ppc_all;
+    if (s.solver.contact && s.bodies.size() != 2)
+      throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
+                      "field; this case has " + std::to_string(s.bodies.size()) + " bodies");
   }
   top.finish();
   return s;

@@ -30,11 +30,19 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       materials_(std::move(materials)),
       body_material_(std::move(body_material)),
       P_(std::move(particles)),
-      grid_(geom, cfg.transfer == Transfer::FLIP) {
+      grid_(geom, cfg.transfer == Transfer::FLIP, cfg.contact ? 2 : 1) {
   if (geom.tile < 4 || geom.tile > kern::kMaxTile)
     throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
   const std::size_t n = P_.size();
   P_.enable_affine(cfg_.transfer == Transfer::APIC);
+  if (cfg_.contact) {
+    if (body_material_.size() != 2)
+      throw std::invalid_argument("multi-body contact needs exactly two bodies (one velocity field each), got " +
+                                  std::to_string(body_material_.size()));
+    if (cfg_.scheme != Scheme::USL) throw std::invalid_argument("multi-body contact runs with scheme 'usl' only");
+    body_field_.fill(0);
+    body_field_[1] = 1;
+  }
   // optional fields: only what the materials and solver settings need
   bool energy = false, plastic = false, stored_work = false;
   for (const auto& m : materials_) {
@@ -95,6 +103,15 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   }
 }
 
+kern::ParticleView Simulation::pview() {
+  auto v = P_.view();
+  if (cfg_.contact) {
+    v.body = P_.body.data();
+    v.body_field = body_field_.data();
+  }
+  return v;
+}
+
 double Simulation::stable_dt() const {
   if (cfg_.fixed_dt > 0.0) return cfg_.fixed_dt;
   return std::min(cfg_.cfl * grid_.geom.h / max_speed_, heat_dt_);
@@ -137,17 +154,27 @@ void Simulation::scatter_to_grid() {
   Timed t(times_.p2g);
   const auto& g = grid_.geom;
   auto G = grid_.view();
-  auto pv = P_.view();
+  const auto pv = pview();
   kern::clear_grid(g, G, true);
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
-    if (cfg_.transfer == Transfer::APIC)
-      kern::p2g_colored<S, true, kern::P2GWhat::All>(g, G, pv, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
-    else
-      kern::p2g_colored<S, false, kern::P2GWhat::All>(g, G, pv, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
+    using kern::P2GWhat;
+    const std::uint32_t* o = order_.data();
+    const std::uint32_t* c = cell_start_.data();
+    const bool apic = cfg_.transfer == Transfer::APIC;
+    if (cfg_.contact) {
+      if (apic) kern::p2g_colored<S, true, P2GWhat::All, true>(g, G, pv, o, c, cfg_.ugimp_lp);
+      else kern::p2g_colored<S, false, P2GWhat::All, true>(g, G, pv, o, c, cfg_.ugimp_lp);
+    } else {
+      if (apic) kern::p2g_colored<S, true, P2GWhat::All>(g, G, pv, o, c, cfg_.ugimp_lp);
+      else kern::p2g_colored<S, false, P2GWhat::All>(g, G, pv, o, c, cfg_.ugimp_lp);
+    }
   });
-  double* arrays[] = {G.m, G.px, G.py, G.fx, G.fy};
-  kern::fold_periodic(g, arrays, 5);
+  for (int f = 0; f < G.fields; ++f) {
+    const auto F = G.field(f);
+    double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.gmx, F.gmy, F.vol};
+    kern::fold_periodic(g, arrays, cfg_.contact ? 8 : 5);
+  }
 }
 
 void Simulation::update_grid() {
@@ -161,29 +188,35 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
-  kern::grid_update(g, G, q, row_force_.data());
-  double* arrays[] = {G.vx, G.vy, G.dvx, G.dvy};
-  kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
-  if (transfer_heat()) {  // the heating gather reads the scatter's momenta
-    double* scatter[] = {G.m, G.px, G.py};
-    kern::fill_periodic_ghosts(g, scatter, 3);
-  }
   WallForces w;
-  for (int r = 0; r < g.sy(); ++r) {
-    const double* rf = &row_force_[kern::kRowSlots * r];
-    w.left += rf[0];
-    w.right += rf[1];
-    w.bottom += rf[2];
-    w.top += rf[3];
+  for (int f = 0; f < G.fields; ++f) {
+    kern::grid_update(g, G.field(f), q, row_force_.data());
+    for (int r = 0; r < g.sy(); ++r) {
+      const double* rf = &row_force_[kern::kRowSlots * r];
+      w.left += rf[0];
+      w.right += rf[1];
+      w.bottom += rf[2];
+      w.top += rf[3];
+    }
   }
   wall_ = w;
+  if (cfg_.contact) kern::grid_contact(g, G, q, kern::ContactParams{cfg_.friction, cfg_.contact_volume_fraction});
+  for (int f = 0; f < G.fields; ++f) {
+    const auto F = G.field(f);
+    double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
+    kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
+    if (transfer_heat()) {  // the heating gather reads the scatter's momenta
+      double* scatter[] = {F.m, F.px, F.py};
+      kern::fill_periodic_ghosts(g, scatter, 3);
+    }
+  }
 }
 
 void Simulation::gather_from_grid() {
   Timed t(times_.g2p);
   const auto& g = grid_.geom;
   auto G = grid_.view();
-  auto pv = P_.view();
+  const auto pv = pview();
   const std::size_t n = P_.size();
   kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha};
   // walls: the largest double below the far edge keeps a clamped point inside the grid

@@ -39,6 +39,12 @@ struct SolverConfig {
   double av_quadratic = 1.5;   // c_Q
   // Heat conduction on the grid (kernels/heat.hpp); its explicit limit is folded into dt.
   bool heat_conduction = false;
+  // Multi-body contact: one velocity field per body (exactly two bodies), Coulomb friction,
+  // contact only while approaching and where the nodal volume shows the bodies touching
+  // (kernels/grid_update.hpp). Off: one field, bodies stick once they meet.
+  bool contact = false;
+  double friction = 0.0;                 // Coulomb mu
+  double contact_volume_fraction = 1.0;  // nodal volume (in cells) needed for contact
 };
 
 // A step that cannot go on: a particle left the grid or its volume became non-positive.
@@ -104,6 +110,7 @@ class Simulation {
   void conduct_heat();
 
   void check_volume(std::ptrdiff_t bad) const;
+  kern::ParticleView pview();  // particle view, with velocity fields when contact is on
   // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
   // (see kern::g2p_particle), so total energy is conserved by the transfers.
   bool transfer_heat() const { return cfg_.transfer == Transfer::APIC && !P_.e.empty(); }
@@ -120,6 +127,7 @@ class Simulation {
   std::vector<std::uint32_t> scratch_u_;
   std::vector<double> row_force_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
+  std::array<std::uint8_t, 256> body_field_{};          // contact: velocity field of each body
 
   // heat conduction
   std::vector<Thermo> thermo_;

@@ -1,6 +1,7 @@
 #include "grid_update.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace smpm::kern {
 
@@ -115,7 +116,7 @@ void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const Gri
 }
 
 void clear_grid(const GridGeom& g, const GridView& G, bool all) {
-  const std::size_t nn = g.num_nodes();
+  const std::size_t nn = g.num_nodes() * static_cast<std::size_t>(G.fields);
 #pragma omp parallel for schedule(static)
   for (std::size_t n = 0; n < nn; ++n) {
     G.px[n] = 0.0;
@@ -124,6 +125,59 @@ void clear_grid(const GridGeom& g, const GridView& G, bool all) {
       G.m[n] = 0.0;
       G.fx[n] = 0.0;
       G.fy[n] = 0.0;
+      if (G.gmx) G.gmx[n] = G.gmy[n] = G.vol[n] = 0.0;
+    }
+  }
+}
+
+void grid_contact(const GridGeom& g, const GridView& G, const GridUpdateParams& q, const ContactParams& c) {
+  int i0, i1;
+  real_columns(g, i0, i1);
+  const int sy = g.sy();
+  const std::size_t fs = G.fstride;
+  const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < sy; ++r) {
+    const int j = r - g.pad;
+    for (int i = i0; i <= i1; ++i) {
+      const std::size_t a = g.node(i, j), b = a + fs;
+      const double m0 = G.m[a], m1 = G.m[b];
+      if (m0 <= q.mass_eps || m1 <= q.mass_eps || G.vol[a] + G.vol[b] < vmin) continue;
+      // sum_p m_p grad N_i(x_p) points out of each body (mass grows the other way)
+      double nx = G.gmx[b] - G.gmx[a], ny = G.gmy[b] - G.gmy[a];
+      const double len = std::sqrt(nx * nx + ny * ny);
+      if (!(len > 0.0)) continue;
+      nx /= len;
+      ny /= len;
+      const double M = m0 + m1;
+      const double cx = (m0 * G.vx[a] + m1 * G.vx[b]) / M, cy = (m0 * G.vy[a] + m1 * G.vy[b]) / M;
+      const double dx = G.vx[a] - cx, dy = G.vy[a] - cy;
+      const double dn = dx * nx + dy * ny;
+      if (dn >= 0.0) continue;  // separating: no contact force
+      const double tx = dx - dn * nx, ty = dy - dn * ny, tl = std::sqrt(tx * tx + ty * ty);
+      double ux, uy;  // corrected velocity of field 0
+      if (tl <= c.friction * -dn) {
+        ux = cx;
+        uy = cy;
+      } else {
+        const double f = c.friction * -dn / tl;
+        ux = G.vx[a] - dn * nx - f * tx;
+        uy = G.vy[a] - dn * ny - f * ty;
+      }
+      double wx = (M * cx - m0 * ux) / m1, wy = (M * cy - m0 * uy) / m1;
+      double scratch[4] = {0, 0, 0, 0};
+      constrain(g, q.walls, i, j, ux, uy, scratch);
+      constrain(g, q.walls, i, j, wx, wy, scratch);
+      if (q.flip) {
+        G.dvx[a] += ux - G.vx[a];
+        G.dvy[a] += uy - G.vy[a];
+        G.dvx[b] += wx - G.vx[b];
+        G.dvy[b] += wy - G.vy[b];
+      }
+      G.vx[a] = ux;
+      G.vy[a] = uy;
+      G.vx[b] = wx;
+      G.vy[b] = wy;
     }
   }
 }

@@ -31,10 +31,30 @@ struct GridUpdateParams {
 inline constexpr int kRowSlots = 4;
 void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q, double* row_force);
 
+// Multi-body contact between two velocity fields (Bardenhagen et al. 2001). After each field's
+// own update (grid_update on G.field(f)), at every node where both fields carry mass and
+// sum_f V_f >= volume_fraction h^2:
+//   n = (g_1 - g_0) / |...|, g_f = sum_p m_p grad N_i(x_p) the outward normal of field f
+//   (n points from body 1 into body 0)
+//   v_cm = (m_0 v_0 + m_1 v_1) / (m_0 + m_1),  d = v_0 - v_cm
+//   approaching (d . n < 0): the normal part of d is removed; the tangential part t is
+//   removed too when |t| <= mu |d . n| (stick), else reduced by mu |d . n| (Coulomb slip);
+//   v_1 follows from momentum conservation. Separating fields (d . n >= 0) move freely.
+// Walls are applied again to the corrected velocities.
+struct ContactParams {
+  double friction = 0.0;         // Coulomb coefficient mu
+  // Nodal volume sum_f sum_p w V_p needed for contact, in cells. 1: the bodies fill the node's
+  // cell, i.e. they touch there. Below 1, nodes at a body's corner or a thin gap count as
+  // contact and plough: a block sliding at 1 m/s on a frictionless floor lost 17 % of its speed
+  // at 0.9 and was kicked up; at 1 nothing (docs/verification.md).
+  double volume_fraction = 1.0;
+};
+void grid_contact(const GridGeom& g, const GridView& G, const GridUpdateParams& q, const ContactParams& c);
+
 // MUSL remap: velocity = momentum / mass, walls applied, no forces.
 void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const GridUpdateParams& q);
 
-// Zero the arrays a P2G writes (mass and forces only when `all`).
+// Zero the arrays a P2G writes (mass and forces only when `all`), every field.
 void clear_grid(const GridGeom& g, const GridView& G, bool all);
 
 // Periodic x: add ghost-column sums onto their real columns (after P2G), and copy real

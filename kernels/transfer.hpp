@@ -36,6 +36,7 @@ struct GridSink {
   const GridGeom& g;
   const GridView& G;
   std::size_t row(int i, int j) const { return g.node(i, j); }
+  std::size_t field_offset(std::size_t f) const { return f * G.fstride; }
   inline void add_momentum(std::size_t n, double qx, double qy) const {
     Add::add(G.px[n], qx);
     Add::add(G.py[n], qy);
@@ -45,6 +46,11 @@ struct GridSink {
     Add::add(G.fx[n], fx);
     Add::add(G.fy[n], fy);
   }
+  inline void add_contact(std::size_t n, double gmx, double gmy, double vol) const {
+    Add::add(G.gmx[n], gmx);
+    Add::add(G.gmy[n], gmy);
+    Add::add(G.vol[n], vol);
+  }
 };
 
 // Largest tile width the scratch block is sized for (grid.tile_cells is checked against it).
@@ -53,23 +59,33 @@ inline constexpr int kMaxTile = 16;
 // (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
 inline constexpr int tile_span(int tile) { return tile + 3; }
 
+// K values per node: m, px, py, fx, fy (K = 5); with contact also grad m (2) and volume (K = 8).
+// Velocity fields follow each other, span * span nodes apart.
+template <int K>
 struct TileSink {
-  double* s;  // 5 values per node: m, px, py, fx, fy
+  double* s;
   int i0, j0, span;
   std::size_t row(int i, int j) const { return static_cast<std::size_t>((j - j0) * span + (i - i0)); }
+  std::size_t field_offset(std::size_t f) const { return f * static_cast<std::size_t>(span * span); }
   inline void add_momentum(std::size_t n, double qx, double qy) const {
-    s[5 * n + 1] += qx;
-    s[5 * n + 2] += qy;
+    s[K * n + 1] += qx;
+    s[K * n + 2] += qy;
   }
   inline void add_mass_force(std::size_t n, double m, double fx, double fy) const {
-    s[5 * n + 0] += m;
-    s[5 * n + 3] += fx;
-    s[5 * n + 4] += fy;
+    s[K * n + 0] += m;
+    s[K * n + 3] += fx;
+    s[K * n + 4] += fy;
+  }
+  inline void add_contact(std::size_t n, double gmx, double gmy, double vol) const {
+    s[K * n + 5] += gmx;
+    s[K * n + 6] += gmy;
+    s[K * n + 7] += vol;
   }
 };
 
-// Scatter of one particle p. APIC adds the affine momentum m C (x_i - x_p).
-template <class Shape, bool APIC, P2GWhat What, class Sink>
+// Scatter of one particle p into its velocity field. APIC adds the affine momentum
+// m C (x_i - x_p). Contact also scatters the mass gradient (for normals) and the volume.
+template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false>
 inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView& P, std::uint32_t p,
                          double lp) {
   constexpr int N = Shape::N;
@@ -93,8 +109,10 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
     vsyy = -Vh * (P.syy[p] - pq);
     vsxy = -Vh * P.sxy[p];
   }
+  const std::size_t foff = sink.field_offset(P.field(p));
+  const double mh = m * inv_h, Vp = Contact ? P.V[p] : 0.0;
   for (int b = 0; b < N; ++b) {
-    const std::size_t row = sink.row(bx, by + b);
+    const std::size_t row = sink.row(bx, by + b) + foff;
     const double dy = (by + b) - yg;
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
@@ -109,16 +127,17 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
       if constexpr (What == P2GWhat::All) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
         sink.add_mass_force(n, w * m, vsxx * gx + vsxy * gy, vsxy * gx + vsyy * gy);
+        if constexpr (Contact) sink.add_contact(n, mh * gx, mh * gy, w * Vp);
       }
     }
   }
 }
 
 // Scatter of the particles at sorted positions [s0, s1) into a sink.
-template <class Shape, bool APIC, P2GWhat What, class Sink>
+template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false>
 inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P, const std::uint32_t* order,
                       std::size_t s0, std::size_t s1, double lp) {
-  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What>(g, sink, P, order[s], lp);
+  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What, Sink, Contact>(g, sink, P, order[s], lp);
 }
 
 // Colored iteration over tiles: tiles of one color (tile parity in x and y) touch disjoint
@@ -126,20 +145,21 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
 // one after another. Each tile accumulates K values per node into an L1-resident scratch block
 // covering its footprint (body(block, s0, s1) for the particles at sorted positions [s0, s1)),
 // then the block is handed node by node to flush(values, grid_node), clipped to the node
-// storage (a partial last tile's block reaches past it). Fixed tile order and fixed particle
+// storage (a partial last tile's block reaches past it). With F fields the block holds F
+// sub-blocks of span * span nodes; `values` points at the node in the first. Fixed tile order and fixed particle
 // order within a tile make every node's sum independent of the thread count.
 struct TileBlock {
   double* s;
   int i0, j0, span;
 };
 
-template <int K, class Body, class Flush>
+template <int K, int F = 1, class Body, class Flush>
 void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush) {
   const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
 #pragma omp parallel
   {
-    alignas(64) double scratch[K * tile_span(kMaxTile) * tile_span(kMaxTile)];
+    alignas(64) double scratch[K * F * tile_span(kMaxTile) * tile_span(kMaxTile)];
     for (int color = 0; color < 4; ++color) {
       const int cx = color & 1, cy = color >> 1;
       const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
@@ -150,7 +170,7 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
         if (s0 == s1) continue;
         const TileBlock blk{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
-        std::fill(scratch, scratch + K * span * span, 0.0);
+        std::fill(scratch, scratch + K * F * span * span, 0.0);
         body(blk, s0, s1);
         const int jn = std::min(span, g.ny + g.pad - blk.j0 + 1);
         const int in = std::min(span, g.nx + g.pad - blk.i0 + 1);
@@ -164,22 +184,35 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
   }
 }
 
-// Colored scatter of mass, momentum and internal force (or momentum only).
-template <class Shape, bool APIC, P2GWhat What>
+// Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
+// two velocity fields, with mass gradients and volumes.
+template <class Shape, bool APIC, P2GWhat What, bool Contact = false>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  for_each_tile_colored<5>(
+  constexpr int K = Contact ? 8 : 5, F = Contact ? 2 : 1;
+  const std::size_t field_block = static_cast<std::size_t>(K) * tile_span(g.tile) * tile_span(g.tile);
+  for_each_tile_colored<K, F>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
-        p2g_range<Shape, APIC, What>(g, TileSink{b.s, b.i0, b.j0, b.span}, P, order, s0, s1, lp);
+        p2g_range<Shape, APIC, What, TileSink<K>, Contact>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order, s0,
+                                                           s1, lp);
       },
-      [&](const double* v, std::size_t n) {
-        G.px[n] += v[1];
-        G.py[n] += v[2];
-        if constexpr (What == P2GWhat::All) {
-          G.m[n] += v[0];
-          G.fx[n] += v[3];
-          G.fy[n] += v[4];
+      [&](const double* v0, std::size_t n0) {
+        for (int f = 0; f < F; ++f) {
+          const double* v = v0 + f * field_block;
+          const std::size_t n = n0 + f * G.fstride;
+          G.px[n] += v[1];
+          G.py[n] += v[2];
+          if constexpr (What == P2GWhat::All) {
+            G.m[n] += v[0];
+            G.fx[n] += v[3];
+            G.fy[n] += v[4];
+            if constexpr (Contact) {
+              G.gmx[n] += v[5];
+              G.gmy[n] += v[6];
+              G.vol[n] += v[7];
+            }
+          }
         }
       });
 }
@@ -240,8 +273,9 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     ux = P.vx[p]; uy = P.vy[p];
     uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
   }
+  const std::size_t foff = P.field(p) * G.fstride;
   for (int b = 0; b < N; ++b) {
-    const std::size_t row = g.node(bx, by + b);
+    const std::size_t row = g.node(bx, by + b) + foff;
     const double dy = (by + b) - yg;
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;

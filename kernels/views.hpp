@@ -3,6 +3,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 
 namespace smpm::kern {
 
@@ -34,12 +35,28 @@ struct GridGeom {
   double length_y() const { return ny * h; }
 };
 
+// With multi-body contact every array holds one block of num_nodes() values per velocity field
+// (field f of node n at n + f * fstride); fstride is 0 with a single field.
 struct GridView {
   double* m;            // mass [kg/m]
-  double* px; double* py;  // momentum, then velocity after the grid update
+  double* px; double* py;  // momentum
   double* fx; double* fy;  // force [N/m]
   double* vx; double* vy;  // updated velocity (after forces and boundary conditions)
   double* dvx; double* dvy;  // v_new - v_old, for FLIP (may be null when unused)
+  // contact only (null otherwise): mass gradient sum_p m_p grad w_ip [kg/m^2], volume sum w V
+  double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr;
+  std::size_t fstride = 0;  // num_nodes() with two fields, 0 with one
+  int fields = 1;
+  // The view of field f alone (a one-field view into the same storage).
+  GridView field(int f) const {
+    GridView v = *this;
+    const std::size_t o = static_cast<std::size_t>(f) * fstride;
+    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol})
+      if (*a) *a += o;
+    v.fstride = 0;
+    v.fields = 1;
+    return v;
+  }
 };
 
 // Particle fields the transfer kernels read or write. Plane strain: stress is the deviator
@@ -58,6 +75,10 @@ struct ParticleView {
   const double* q;
   // Specific internal energy (null when not tracked), heated by the APIC transfer dissipation.
   double* e;
+  // Multi-body contact: velocity field of each particle, body_field[body[p]] (null: one field).
+  const std::uint8_t* body = nullptr;
+  const std::uint8_t* body_field = nullptr;
+  std::size_t field(std::size_t p) const { return body_field ? body_field[body[p]] : 0; }
 };
 
 }  // namespace smpm::kern

@@ -1,0 +1,143 @@
+// Multi-body contact (two velocity fields, Coulomb friction): a block sliding down a slope, and
+// the symmetric two-body impact against the rigid-wall half model.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "engine/case_reader.hpp"
+#include "engine/scene.hpp"
+#include "engine/simulation.hpp"
+
+using namespace smpm;
+
+namespace {
+
+// A block (body 1) on an elastic slab (body 0) held by a no-slip floor, gravity tilted by theta:
+// Coulomb friction gives the block the acceleration g (sin theta - mu cos theta) along x, or
+// none when tan theta < mu. Returns the block's mean x-acceleration over 0.05-0.3 s.
+double slope_acceleration(double theta_deg, double mu) {
+  kern::GridGeom g;
+  g.h = 0.02;
+  g.nx = 50;
+  g.ny = 20;
+  g.periodic_x = true;
+  SolverConfig cfg;
+  cfg.contact = true;
+  cfg.friction = mu;
+  cfg.cfl = 0.3;
+  const double th = theta_deg * M_PI / 180.0, grav = 9.81;
+  cfg.gravity_x = grav * std::sin(th);
+  cfg.gravity_y = -grav * std::cos(th);
+  cfg.walls.bottom = kern::Wall::NoSlip;
+  Material m;
+  m.name = "stiff";
+  m.rho0 = 1000.0;
+  m.E = 1e7;
+  m.nu = 0.3;
+  Particles P = fill_rectangle(g, 2, 0.0, 1.0, 0.0, 0.1, m.rho0, 0.0, 0.0, 0);
+  P.append(fill_rectangle(g, 2, 0.1, 0.3, 0.1, 0.2, m.rho0, 0.0, 0.0, 1));
+  Simulation sim(g, cfg, {m}, {0, 0}, P);
+  std::vector<double> t, v;
+  while (sim.time() < 0.3) {
+    sim.step(0.3 - sim.time());
+    if (sim.time() < 0.05) continue;
+    double mv = 0, M = 0;
+    const auto& Q = sim.particles();
+    for (std::size_t i = 0; i < Q.size(); ++i)
+      if (Q.body[i] == 1) {
+        mv += Q.m[i] * Q.vx[i];
+        M += Q.m[i];
+      }
+    t.push_back(sim.time());
+    v.push_back(mv / M);
+  }
+  double st = 0, sv = 0, stt = 0, stv = 0;
+  const double n = static_cast<double>(t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    st += t[i]; sv += v[i]; stt += t[i] * t[i]; stv += t[i] * v[i];
+  }
+  return (n * stv - st * sv) / (n * stt - st * st);
+}
+
+}  // namespace
+
+TEST_CASE("block sliding down a slope with Coulomb friction", "[verification][contact]") {
+  const double g = 9.81;
+  for (double mu : {0.2, 0.5}) {
+    const double a = slope_acceleration(30.0, mu);
+    const double exact = g * (std::sin(M_PI / 6) - mu * std::cos(M_PI / 6));
+    WARN("mu " << mu << ": acceleration " << a << " m/s^2, exact " << exact);
+    CHECK(a == Approx(exact).epsilon(0.03));
+  }
+  // tan 20 deg = 0.36 < mu = 0.5: the block sticks
+  const double a = slope_acceleration(20.0, 0.5);
+  WARN("theta 20, mu 0.5: acceleration " << a << " m/s^2 (sticks)");
+  CHECK(std::fabs(a) < 0.01 * g);
+}
+
+namespace {
+
+struct Series {
+  std::vector<double> P;  // mean pressure of the target in 100 <= y <= 600 um
+  double interface_error = 0;  // worst gap or overlap of the bodies at y = 0 [m]
+  double momentum = 0;         // worst |total y-momentum| / (sum m |v|)
+};
+
+Series run(bool two_body) {
+  auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/dense_impact_1000.toml");
+  apply_overrides(doc, {"run.end_time_ns=100.0"});
+  if (two_body) {
+    apply_overrides(doc, {"grid.y_range_um=[-2000.0, 2000.0]", "walls.bottom=\"none\"", "contact.mode=\"multi_field\""});
+    doc["bodies"].as_array()->push_back(toml::table{{"name", "flyer"}, {"material", "al"}, {"mirror_of", "target"},
+                                                    {"velocity_m_s", toml::array{0.0, 1000.0}}});
+  }
+  Scene sc = build_scene(doc, "impact", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+  Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  Series s;
+  double next = 0.0;
+  double scale = 0;
+  for (std::size_t i = 0; i < sim.particles().size(); ++i)
+    scale += sim.particles().m[i] * std::fabs(sim.particles().vy[i]);
+  while (sim.time() < sc.run.end_time) {
+    sim.step(std::min(sc.run.end_time, next) - sim.time());
+    if (sim.time() < next - 1e-18) continue;
+    next += 10e-9;
+    const auto& P = sim.particles();
+    double sum = 0, n = 0, ymin_t = 1, ymax_f = -1;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      if (P.body[i] == 0) {
+        ymin_t = std::min(ymin_t, P.y[i]);
+        if (P.y[i] >= 100e-6 && P.y[i] <= 600e-6) {
+          sum += P.p[i];
+          n += 1;
+        }
+      } else {
+        ymax_f = std::max(ymax_f, P.y[i]);
+      }
+    }
+    s.P.push_back(sum / n);
+    if (two_body) {
+      // the first rows of points sit a quarter cell from the plane on either side
+      s.interface_error = std::max({s.interface_error, std::fabs(ymin_t - 0.25 * sc.geom.h),
+                                    std::fabs(ymax_f + 0.25 * sc.geom.h)});
+      s.momentum = std::max(s.momentum, std::fabs(sim.momentum()[1]) / scale);
+    }
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("symmetric two-body impact matches the rigid-wall half model", "[verification][contact]") {
+  const Series half = run(false), two = run(true);
+  REQUIRE(half.P.size() == two.P.size());
+  double worst = 0, peak = 0;
+  for (std::size_t k = 0; k < half.P.size(); ++k) peak = std::max(peak, half.P[k]);
+  for (std::size_t k = 0; k < half.P.size(); ++k) worst = std::max(worst, std::fabs(two.P[k] - half.P[k]) / peak);
+  WARN("regional mean pressure: worst difference " << worst << " of the peak " << peak << " Pa; interface within "
+                                                   << two.interface_error << " m; momentum " << two.momentum);
+  CHECK(worst < 0.03);
+  CHECK(two.interface_error < 5e-6);  // one cell
+  CHECK(two.momentum < 1e-12);
+}
