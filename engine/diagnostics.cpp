@@ -36,7 +36,9 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
 
 double particle_temperature(const Particles& P, std::size_t p, const Thermo& th, const Material& m) {
   if (P.e.empty()) return m.T0;
-  return th.temperature(P.m[p] / P.V[p], P.e[p]);
+  // plastic work not turned into heat (heat_fraction < 1) is stored, not hot
+  const double stored = P.wp.empty() ? 0.0 : (1.0 - m.heat_fraction) * P.wp[p];
+  return th.temperature(P.m[p] / P.V[p], P.e[p], stored);
 }
 
 }  // namespace smpm

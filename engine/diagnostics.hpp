@@ -17,7 +17,8 @@ namespace smpm {
 double front_position(const Particles& P, std::uint8_t body, double vy0, double y0, double dy, int rows,
                       bool from_top);
 
-// Temperature of particle p [K] (T0 where the particle carries no energy).
+// Temperature of particle p [K] (T0 where the particle carries no energy); the stored share
+// (1 - heat_fraction) of its plastic work does not count as heat.
 double particle_temperature(const Particles& P, std::size_t p, const Thermo& th, const Material& m);
 
 }  // namespace smpm

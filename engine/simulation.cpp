@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "engine/diagnostics.hpp"
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
@@ -284,7 +285,7 @@ void Simulation::conduct_heat() {
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) {
     const int k = body_material_[P_.body[p]];
-    T_[p] = thermo_[k].temperature(P_.m[p] / P_.V[p], P_.e[p]);
+    T_[p] = particle_temperature(P_, p, thermo_[k], materials_[k]);
   }
   const kern::HeatGrid H{heat_cap_.data(), heat_capT_.data(), heat_T_.data(), heat_dT_.data()};
   const kern::HeatParticles hp{P_.x.data(), P_.y.data(), P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(),

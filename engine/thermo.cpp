@@ -44,10 +44,11 @@ double Thermo::isentrope_temperature(double rho) const {
   return m_.T0 * std::exp(m_.gamma0 * (1.0 - m_.rho0 / rho));
 }
 
-double Thermo::temperature(double rho, double e) const {
+double Thermo::temperature(double rho, double e, double stored) const {
   if (m_.cv <= 0.0) return m_.T0;
-  if (m_.temperature == TemperatureKind::Simple || es_.empty()) return m_.T0 + e / m_.cv;
-  return isentrope_temperature(rho) + (e - isentrope_energy(rho)) / m_.cv;
+  const double heat = e - stored;
+  if (m_.temperature == TemperatureKind::Simple || es_.empty()) return m_.T0 + heat / m_.cv;
+  return isentrope_temperature(rho) + (heat - isentrope_energy(rho)) / m_.cv;
 }
 
 HugoniotState hugoniot(const Material& m, double up) {

@@ -16,7 +16,9 @@ namespace smpm {
 class Thermo {
  public:
   explicit Thermo(const Material& m);
-  double temperature(double rho, double e) const;  // [K]
+  // [K]; `stored` [J/kg] is internal energy that is not heat (plastic work kept as cold work
+  // when heat_fraction < 1).
+  double temperature(double rho, double e, double stored = 0.0) const;
   double isentrope_energy(double rho) const;        // e_s [J/kg]
   double isentrope_temperature(double rho) const;   // T_s [K]
   // Range of the isentrope table in rho/rho0; outside it e_s is extrapolated linearly in eta.

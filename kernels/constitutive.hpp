@@ -15,6 +15,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <Eigen/Core>
+
 #include "views.hpp"
 
 namespace smpm::kern {
@@ -64,21 +66,30 @@ struct MieGruneisenEos {
 
 // ---- strength parts --------------------------------------------------------------------------
 
+// The in-plane deviator as an Eigen fixed-size symmetric 2x2 (s_zz = -trace follows).
+using Mat2 = Eigen::Matrix2d;
+inline Mat2 deviator(double sxx, double syy, double sxy) { return (Mat2() << sxx, sxy, sxy, syy).finished(); }
+
 // Elastic trial step of the deviator: ds/dt = 2 G dev(D) + W s - s W (Jaumann), plane strain
 // (D_zz = 0, s_zz = -(s_xx + s_yy)); w = W_xy = (L_xy - L_yx) / 2.
 inline void jaumann_trial(double G, double& sxx, double& syy, double& sxy, double dxx, double dyy, double dxy,
                           double w, double dt) {
-  const double tr3 = (dxx + dyy) / 3.0;
-  const double a = sxx, b = syy, c = sxy;
-  sxx = a + dt * (2.0 * G * (dxx - tr3) + 2.0 * w * c);
-  syy = b + dt * (2.0 * G * (dyy - tr3) - 2.0 * w * c);
-  sxy = c + dt * (2.0 * G * dxy + w * (b - a));
+  const Mat2 s = deviator(sxx, syy, sxy);
+  const Mat2 D = (Mat2() << dxx, dxy, dxy, dyy).finished();
+  const Mat2 W = (Mat2() << 0.0, w, -w, 0.0).finished();
+  // in-plane part of dev(D): the 3D deviator subtracts tr(D)/3 from every diagonal entry
+  const Mat2 devD = D - (D.trace() / 3.0) * Mat2::Identity();
+  const Mat2 sn = s + dt * (2.0 * G * devD + W * s - s * W);
+  sxx = sn(0, 0);
+  syy = sn(1, 1);
+  sxy = sn(0, 1);
 }
 
 // sqrt(3 J2) of a plane-strain deviator (s_zz = -(s_xx + s_yy)).
 inline double von_mises(double sxx, double syy, double sxy) {
-  const double szz = -(sxx + syy);
-  return std::sqrt(1.5 * (sxx * sxx + syy * syy + szz * szz + 2.0 * sxy * sxy));
+  const Mat2 s = deviator(sxx, syy, sxy);
+  const double szz = -s.trace();
+  return std::sqrt(1.5 * (s.squaredNorm() + szz * szz));
 }
 
 // No shear strength: the deviator stays zero.

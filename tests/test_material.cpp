@@ -14,6 +14,7 @@
 #include <toml++/toml.h>
 
 #include "engine/case_reader.hpp"
+#include "engine/diagnostics.hpp"
 #include "engine/material.hpp"
 #include "engine/scene.hpp"
 #include "engine/thermo.hpp"
@@ -599,4 +600,26 @@ TEST_CASE("Case reader: overrides in another unit, of the model choice, unitless
   CHECK(contains(case_error(minimal_case("base = \"aluminium\"\nyield_stress = 100.0"), tmp.dir), "needs its unit"));
   // base must be a name
   CHECK(contains(case_error(minimal_case("base = 3"), tmp.dir), "materials.al.base"));
+}
+
+TEST_CASE("heat fraction: the stored share of plastic work does not heat", "[material][thermo]") {
+  Material m;
+  m.name = "al";
+  m.eos = EosKind::MieGruneisen;
+  m.strength = StrengthKind::VonMises;
+  m.rho0 = 2700.0; m.E = 69e9; m.nu = 0.33; m.c0 = 5350.0; m.s = 1.34; m.gamma0 = 2.0;
+  m.Y0 = 120e6; m.H = 384e6; m.cv = 880.0; m.T0 = 300.0;
+  Particles P;
+  P.resize(1);
+  P.m = {2.7e-9};
+  P.V = {1e-12};
+  P.e = {8800.0};   // would be 10 K of heating
+  P.wp = {8800.0};  // all of it plastic work
+  const Thermo th(m);
+  m.heat_fraction = 1.0;
+  const double T1 = particle_temperature(P, 0, th, m);
+  m.heat_fraction = 0.9;
+  const double T09 = particle_temperature(P, 0, th, m);
+  CHECK(T1 - T09 == Approx(0.1 * 8800.0 / 880.0).epsilon(1e-12));  // 1 K less
+  CHECK(T1 == Approx(310.0).epsilon(1e-6));
 }
