@@ -1,6 +1,7 @@
 // Diagnostics computed from the particle state during a run.
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "engine/particles.hpp"
@@ -20,5 +21,41 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
 // Temperature of particle p [K] (T0 where the particle carries no energy); the stored share
 // (1 - heat_fraction) of its plastic work does not count as heat.
 double particle_temperature(const Particles& P, std::size_t p, const Thermo& th, const Material& m);
+
+// Mean, standard deviation (population), skewness and excess kurtosis of a sample (two-pass,
+// in the given order). std = 0 gives skew = kurt = 0.
+struct Moments {
+  double mean = 0, std = 0, skew = 0, kurt = 0;
+};
+Moments moments(const std::vector<double>& v);
+
+// The study's local velocity-gradient measures of one particle, from L = grad v [1/s]:
+// R = |curl v| = |L_yx - L_xy|, D = |div v| = |L_xx + L_yy|, S^2 = D:D (strain-rate tensor,
+// plane strain: D_zz = 0).
+struct GradientMeasures {
+  double R2, D2, S2;  // [1/s^2]
+};
+inline GradientMeasures gradient_measures(double lxx, double lxy, double lyx, double lyy) {
+  const double curl = lyx - lxy, div = lxx + lyy, dxy = 0.5 * (lxy + lyx);
+  return {curl * curl, div * div, lxx * lxx + lyy * lyy + 2.0 * dxy * dxy};
+}
+
+// A band across the full width, y in [y0, y1] [m], in one body.
+struct Region {
+  std::string name;
+  double y0 = 0, y1 = 0;
+  std::uint8_t body = 0;
+};
+
+// Statistics of a region's particles (per particle: all points of a body carry the same mass,
+// so per-particle and mass-weighted means coincide).
+struct RegionStats {
+  std::size_t count = 0;
+  Moments P, T, rho, Uy;        // [Pa], [K], [kg/m^3], [m/s]
+  double R2 = 0, D2 = 0, S2 = 0;  // means [1/s^2]
+};
+std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
+                                      const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
+                                      const std::vector<int>& body_material);
 
 }  // namespace smpm

@@ -400,4 +400,30 @@ void SnapshotWriter::write_xdmf() const {
   rename_or_throw(tmp_path, final_path);
 }
 
+void write_table_h5(const fs::path& file, const std::string& group, const std::vector<std::string>& columns,
+                    const std::vector<std::vector<double>>& data,
+                    const std::vector<std::pair<std::string, std::string>>& attributes) {
+  if (columns.size() != data.size()) throw std::invalid_argument("write_table_h5: columns and data differ in size");
+  QuietHdf5 quiet;
+  const fs::path tmp = file.string() + ".tmp";
+  {
+    const H5File f{tmp.string()};
+    H5Id h = f.own(H5Fcreate(f.name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "H5Fcreate");
+    const std::string gname = "/" + group;
+    H5Id grp = f.own(H5Gcreate2(h.get(), gname.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
+                     "H5Gcreate2", "group " + gname);
+    for (const auto& [k, v] : attributes) f.string_attribute(grp.get(), k.c_str(), v, "group " + gname);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const std::string what = "dataset " + gname + "/" + columns[c];
+      const hsize_t dims[1] = {static_cast<hsize_t>(data[c].size())};
+      H5Id d = f.dataset(grp.get(), columns[c].c_str(), dims, 1, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE,
+                         data[c].data(), what);
+      f.check(d.close(), "H5Dclose", what);
+    }
+    f.check(grp.close(), "H5Gclose", "group " + gname);
+    f.check(h.close(), "H5Fclose");
+  }
+  rename_or_throw(tmp, file);
+}
+
 }  // namespace smpm

@@ -77,4 +77,10 @@ class SnapshotWriter {
   std::vector<Entry> entries_;
 };
 
+// Writes a table as one HDF5 file: group /<group> with one 1D double dataset per column and a
+// string attribute per entry of `attributes` (written to a temporary file, then renamed).
+void write_table_h5(const std::filesystem::path& file, const std::string& group,
+                    const std::vector<std::string>& columns, const std::vector<std::vector<double>>& data,
+                    const std::vector<std::pair<std::string, std::string>>& attributes);
+
 }  // namespace smpm

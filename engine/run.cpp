@@ -164,9 +164,42 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   SnapshotWriter snaps(out / "fields");
   auto snapshot = [&] { snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps()); };
   // the compression front runs through the target: the body named "target", else body 0
-  std::size_t target = 0;
-  for (std::size_t b = 0; b < scene.bodies.size(); ++b)
-    if (scene.bodies[b].name == "target") target = b;
+  const std::size_t target = scene.target;
+  // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
+  std::ofstream series(out / "series.csv");
+  series << "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"
+            "Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,T_skew,T_kurt,rho_skew,"
+            "rho_kurt,Uy_skew,Uy_kurt\n"
+         << std::setprecision(8);
+  const std::vector<std::string> columns{"time_ns", "region", "count", "P_mean_GPa", "P_std_GPa", "T_mean_K",
+                                         "T_std_K", "rho_mean_gcc", "rho_std_gcc", "Uy_mean_ms", "Uy_std_ms",
+                                         "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2", "P_skew", "P_kurt",
+                                         "T_skew", "T_kurt", "rho_skew", "rho_kurt", "Uy_skew", "Uy_kurt"};
+  std::vector<std::vector<double>> table(columns.size());
+  std::string region_names;
+  for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
+  auto write_series = [&] {
+    const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material());
+    for (std::size_t r = 0; r < stats.size(); ++r) {
+      const auto& st = stats[r];
+      const double us2 = 1e-12;  // 1/s^2 -> 1/us^2
+      const std::vector<double> row{sim.time() * 1e9, double(r), double(st.count), st.P.mean * 1e-9, st.P.std * 1e-9,
+                                    st.T.mean, st.T.std, st.rho.mean * 1e-3, st.rho.std * 1e-3, st.Uy.mean, st.Uy.std,
+                                    st.R2 * us2, st.D2 * us2, st.S2 * us2, st.P.skew, st.P.kurt, st.T.skew, st.T.kurt,
+                                    st.rho.skew, st.rho.kurt, st.Uy.skew, st.Uy.kurt};
+      for (std::size_t c = 0; c < row.size(); ++c) {
+        table[c].push_back(row[c]);
+        if (c == 1) series << ',' << scene.regions[r].name;
+        else series << (c ? "," : "") << row[c];
+      }
+      series << '\n';
+    }
+  };
+  auto write_series_h5 = [&] {
+    write_table_h5(out / "series.h5", "series", columns, table,
+                   {{"regions", region_names}, {"region_column", "index into the regions attribute"},
+                    {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2"}});
+  };
   const double vy0 = scene.bodies[target].vy0;
   std::ofstream front;
   if (vy0 != 0.0) {
@@ -211,6 +244,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     snapshot();
     next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
     write_energy();
+    write_series();
     next_energy = scene.run.diagnostics_interval;
     while (sim.time() < t_end - eps) {
       if (g_interrupted) {
@@ -230,10 +264,12 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       if (sim.time() >= next_energy - eps) {
         write_energy();
         write_front();
+        write_series();
         next_energy = sim.time() + scene.run.diagnostics_interval;
       }
       if (sim.time() >= next_snap - eps && sim.time() < t_end - eps) {
         snapshot();
+        write_series_h5();
         next_snap += scene.run.snapshot_interval;
       }
       const double now = omp_get_wtime();
@@ -244,6 +280,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
                     sim.steps(), sim.time() * 1e9, sim.last_dt() * 1e9, 100 * frac,
                     hms(el * (1 - frac) / std::max(frac, 1e-12)).c_str(), particle_steps / el * 1e-6);
         std::fflush(stdout);
+        for (std::ofstream* f : {&energy, &front, &series, &wall})
+          if (f->is_open()) f->flush();
       }
     }
     if (s.status == "running") {
@@ -260,6 +298,9 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
   // final state, whatever happened
   write_energy();
+  write_series();
+  series.flush();
+  write_series_h5();
   snapshot();
   write_run_json(out / "run.json", scene, sim, s, threads);
   if (!opt.quiet) {

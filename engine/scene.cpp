@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <optional>
+#include <tuple>
 #include <limits>
 #include <unordered_map>
 
@@ -383,6 +384,31 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     if (s.solver.contact && s.bodies.size() != 2)
       throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
                       "field; this case has " + std::to_string(s.bodies.size()) + " bodies");
+  }
+  for (std::size_t b = 0; b < s.bodies.size(); ++b)
+    if (s.bodies[b].name == "target") s.target = b;
+  // [[regions]]: bands across the full width, heights measured from the impact plane y = 0
+  {
+    auto regions = top.tables("regions");
+    if (regions.empty()) {
+      for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
+        s.regions.push_back({name, a, b, static_cast<std::uint8_t>(s.target)});
+    }
+    for (auto& r : regions) {
+      Region g;
+      g.name = r.string("name");
+      std::tie(g.y0, g.y1) = r.pair("y_range", kLength, true);
+      const std::string body = r.string("body", s.bodies[s.target].name);
+      bool found = false;
+      for (std::size_t b = 0; b < s.bodies.size(); ++b)
+        if (s.bodies[b].name == body) {
+          g.body = static_cast<std::uint8_t>(b);
+          found = true;
+        }
+      if (!found) throw CaseError("case key '" + r.path() + ".body': no body named '" + body + "'");
+      r.finish();
+      s.regions.push_back(g);
+    }
   }
   top.finish();
   return s;

@@ -6,6 +6,7 @@
 
 #include <toml++/toml.h>
 
+#include "engine/diagnostics.hpp"
 #include "engine/material.hpp"
 #include "engine/particles.hpp"
 #include "engine/simulation.hpp"
@@ -40,6 +41,8 @@ struct Scene {
   std::vector<int> body_material;
   std::vector<BodyInfo> bodies;
   Particles particles;
+  std::size_t target = 0;       // the body named "target", else body 0: diagnostics default to it
+  std::vector<Region> regions;  // bands for series.csv (default: the study's I, II, III of the target)
   toml::table resolved;  // the case with every default filled in
   std::string name;      // case file stem
 };

@@ -1,5 +1,6 @@
 #include "engine/thermo.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -12,6 +13,7 @@ constexpr int kTable = 8192;
 Thermo::Thermo(const Material& m) : m_(m) {
   if (m.eos != EosKind::MieGruneisen) return;  // simple temperature only
   const auto eos = m.mie_gruneisen();
+  if (m.spall_strength > 0.0) rho_spall_ = m.rho0 * (1.0 - m.spall_strength / eos.C);  // cold P = -spall
   const double V0 = 1.0 / m.rho0;
   d_ = (kEtaMax - kEtaMin) / (kTable - 1);
   es_.assign(kTable, 0.0);
@@ -48,7 +50,11 @@ double Thermo::temperature(double rho, double e, double stored) const {
   if (m_.cv <= 0.0) return m_.T0;
   const double heat = e - stored;
   if (m_.temperature == TemperatureKind::Simple || es_.empty()) return m_.T0 + heat / m_.cv;
-  return isentrope_temperature(rho) + (heat - isentrope_energy(rho)) / m_.cv;
+  // With a spall limit, states expanded past it are fractured points that carry no tension
+  // (docs/method.md): they are taken at the spall density, else the tension branch of the
+  // isentrope would count their tension work as recoverable and make them cold, even negative.
+  const double r = std::max(rho, rho_spall_);
+  return isentrope_temperature(r) + (heat - isentrope_energy(r)) / m_.cv;
 }
 
 HugoniotState hugoniot(const Material& m, double up) {

@@ -27,6 +27,7 @@ class Thermo {
  private:
   Material m_;
   std::vector<double> es_;  // e_s at eta = kEtaMin + i d
+  double rho_spall_ = 0.0;  // density where the cold pressure reaches -spall_strength (0: none)
   double d_ = 0.0;
 };
 

@@ -1,0 +1,178 @@
+#!/usr/bin/env bash
+# Smoke test of scripts/figures.py: build two small synthetic shockmpm output directories (run.json,
+# series.csv with 3 regions x 5 times, front/wall/energy CSVs, fields/particles.xdmf naming two HDF5
+# snapshots, plus a stale snapshot it does not name), run the script on them and check that every
+# expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, and the
+# exit statuses (0 written, 1 nothing made, 2 bad arguments).
+#
+# usage: tests/figures_smoke.sh [SOURCE_DIR]     (FIGURES_SMOKE_KEEP=1 keeps the temp directory)
+set -euo pipefail
+ROOT="${1:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)}"
+PY=/usr/bin/python3
+SCRIPT="$ROOT/scripts/figures.py"
+
+if ! "$PY" -c 'import numpy, h5py, matplotlib' 2>/dev/null; then
+  echo "figures_smoke: $PY lacks numpy/h5py/matplotlib (apt-get install python3-numpy python3-h5py python3-matplotlib)" >&2
+  exit 1
+fi
+
+TMP="$(mktemp -d "${TMPDIR:-/tmp}/figures_smoke.XXXXXX")"
+if [ "${FIGURES_SMOKE_KEEP:-0}" = 1 ]; then
+  echo "figures_smoke: keeping $TMP"
+else
+  trap 'rm -rf "$TMP"' EXIT
+fi
+
+"$PY" - "$TMP" <<'EOF'
+import json, os, sys
+import h5py
+import numpy as np
+
+def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
+    rng = np.random.default_rng(7)
+    os.makedirs(os.path.join(outdir, "fields"), exist_ok=True)
+    run = {
+        "case": case,
+        "bodies": [{"name": "target", "porosity": porosity, "velocity_m_s": [0.0, -speed],
+                    "material": "al", "particles": 600}],
+        "case_resolved": {"grid": {"cell_size_um": 20.0},
+                          "bodies": [{"name": "target", "points_per_cell": 2}]},
+        "particles": 700, "wall_seconds": 1.5,
+    }
+    json.dump(run, open(os.path.join(outdir, "run.json"), "w"), indent=1)
+
+    times = [0.0, 100.0, 200.0, 300.0, 400.0]
+    with open(os.path.join(outdir, "series.csv"), "w") as f:
+        f.write("time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,"
+                "Uy_mean_ms,Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,"
+                "T_skew,T_kurt,rho_skew,rho_kurt,Uy_skew,Uy_kurt\n")
+        for t in times:
+            for k, reg in enumerate(("I", "II", "III")):
+                s = t / 400.0 / (1 + 0.3 * k) * speed / 1000.0
+                f.write(f"{t},{reg},{300 - 80 * k},{20 * s:.4f},{5 * s:.4f},{300 + 150 * s:.3f},{40 * s:.3f},"
+                        f"{1.35 + 1.3 * s:.4f},{0.2 * s:.4f},{-speed * (1 - s):.2f},{100 * s:.2f},"
+                        f"{1e-3 + 2 * s:.5g},{1e-3 + 5 * s:.5g},{1e-3 + 6 * s:.5g},0.1,0.5,0.2,1.0,-0.3,0.2,0.0,0.4\n")
+    with open(os.path.join(outdir, "front.csv"), "w") as f:
+        f.write("time_ns,front_y_um\n")
+        for t in np.arange(0.0, 501.0, 20.0):
+            f.write(f"{t},{1.5 * t}\n")
+    if with_wall:
+        with open(os.path.join(outdir, "wall.csv"), "w") as f:
+            f.write("time_ns,wall_stress_GPa\n")
+            for t in np.arange(0.0, 501.0, 10.0):
+                f.write(f"{t},{20 + 2 * np.sin(t / 30)}\n")
+    with open(os.path.join(outdir, "energy.csv"), "w") as f:
+        f.write("time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,"
+                "momentum_y_kg_m_s_per_m\n")
+        for t in np.arange(0.0, 501.0, 20.0):
+            ek = 100 * (1 - t / 1000)
+            f.write(f"{t},{ek},{100 - ek},{100.0},0,{-0.2 * ek / 100}\n")
+
+    def snapshot(step, t_ns, n=600):
+        front = 1.5 * t_ns
+        x = rng.uniform(0, 200e-6, n)
+        y = rng.uniform(0, 1000e-6, n)
+        behind = y * 1e6 < front
+        p = np.where(behind, 20e9 + 4e9 * rng.standard_normal(n), 1e8 * rng.random(n))
+        vx = np.where(behind, 200 * np.sin(2 * np.pi * y / 50e-6), 0.0)
+        vy = np.where(behind, 150 * np.cos(2 * np.pi * x / 50e-6), -speed) + 20 * rng.standard_normal(n)
+        # 100 points of a second body ("impactor", index 1) that the figures must leave out
+        m = 100
+        x = np.concatenate([x, rng.uniform(0, 200e-6, m)])
+        y = np.concatenate([y, rng.uniform(-300e-6, -10e-6, m)])
+        body = np.concatenate([np.zeros(n), np.ones(m)])
+        pad = lambda a, v: np.concatenate([a, np.full(m, v)])
+        with h5py.File(os.path.join(outdir, "fields", f"snap_{step:08d}.h5"), "w") as f:
+            g = f.create_group("particles")
+            g.attrs["time"] = t_ns * 1e-9
+            g.attrs["step"] = step
+            g["position"] = np.stack([x, y], 1)
+            g["velocity"] = np.stack([pad(vx, 0.0), pad(vy, 1000.0), np.zeros(n + m)], 1)
+            g["pressure"] = pad(p, 99e9)
+            g["density"] = pad(np.where(behind, 2650 + 80 * rng.standard_normal(n), 1350.0), 9999.0)
+            if with_T:
+                g["temperature"] = pad(np.where(behind, 420 + 30 * rng.gamma(2.0, 1.0, n), 300.0), 9999.0)
+            g["plastic_strain"] = np.zeros(n + m)
+            g["stress_xx"] = -pad(p, 0.0)
+            g["body"] = body
+            g["id"] = np.arange(n + m, dtype=float)
+            f.create_group("topology")["polyvertex"] = np.arange(n + m, dtype=np.int32)
+        return f"snap_{step:08d}.h5", t_ns * 1e-9, n + m
+
+    snaps = [snapshot(200, 200.0), snapshot(500, 500.0)]
+    # a stale snapshot of an earlier run that particles.xdmf does not name: must be ignored
+    with open(os.path.join(outdir, "fields", "snap_00099999.h5"), "wb") as f:
+        f.write(b"not an HDF5 file")
+    grids = ""
+    for fname, t, n in snaps:
+        grids += f"""      <Grid Name="{fname[:-3]}" GridType="Uniform">
+        <Time Value="{t!r}"/>
+        <Topology TopologyType="Polyvertex" NumberOfElements="{n}" NodesPerElement="1">
+          <DataItem Dimensions="{n}" NumberType="Int" Precision="4" Format="HDF">{fname}:/topology/polyvertex</DataItem>
+        </Topology>
+        <Geometry GeometryType="XY">
+          <DataItem Dimensions="{n} 2" NumberType="Float" Precision="8" Format="HDF">{fname}:/particles/position</DataItem>
+        </Geometry>
+        <Attribute Name="pressure" AttributeType="Scalar" Center="Node">
+          <DataItem Dimensions="{n}" NumberType="Float" Precision="8" Format="HDF">{fname}:/particles/pressure</DataItem>
+        </Attribute>
+      </Grid>
+"""
+    with open(os.path.join(outdir, "fields", "particles.xdmf"), "w") as f:
+        f.write('<?xml version="1.0" ?>\n<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd" []>\n<Xdmf Version="3.0">\n'
+                '  <Domain>\n    <Grid Name="particles" GridType="Collection" CollectionType="Temporal">\n'
+                + grids + "    </Grid>\n  </Domain>\n</Xdmf>\n")
+
+tmp = sys.argv[1]
+make(os.path.join(tmp, "a"), "smoke_a", 0.50, 1000.0)
+make(os.path.join(tmp, "b"), "smoke_b", 0.41, 800.0, with_T=False, with_wall=False)
+os.makedirs(os.path.join(tmp, "empty"))
+EOF
+
+fail=0
+check() {  # check FILE...: each exists and is non-empty
+  for f in "$@"; do
+    if [ -s "$f" ]; then echo "ok   $f"; else echo "MISSING $f" >&2; fail=1; fi
+  done
+}
+
+echo "== --out and the other flags (the default run below overwrites these figures)"
+set +e
+"$PY" "$SCRIPT" "$TMP/a" "$TMP/b" --only compare,velocity,distributions --out "$TMP/cmp" --vel-frame lab --vel-bins 0 \
+  --vel-x 20 180 --vel-y 400 600 --dist-times-ns 200 --dist-log --region-y 0 500 >/dev/null
+rc=$?
+set -e
+[ "$rc" = 0 ] || { echo "figures.py --out exited $rc, expected 0" >&2; fail=1; }
+check "$TMP/cmp/compare_means.png"
+
+echo "== figures.py on two synthetic runs"
+set +e
+"$PY" "$SCRIPT" "$TMP/a" "$TMP/b" --time-ns 500 --region I >"$TMP/stdout" 2>"$TMP/stderr"
+rc=$?
+set -e
+cat "$TMP/stdout" "$TMP/stderr"
+[ "$rc" = 0 ] || { echo "figures.py exited $rc, expected 0" >&2; fail=1; }
+A="$TMP/a/figures"
+B="$TMP/b/figures"
+check "$A"/{map_P,map_T,series_means,series_std,velocity_field,dissipation,distributions,history}.png \
+      "$A"/compare_{means,std}.png \
+      "$B"/{map_P,series_means,series_std,velocity_field,dissipation,distributions,history}.png
+if [ -e "$B/map_T.png" ]; then echo "map_T.png written for a run without temperature" >&2; fail=1; fi
+grep -q "skip map_T.png" "$TMP/stderr" || { echo "no skip message for map_T.png" >&2; fail=1; }
+n_written=$(grep -c '\.png$' "$TMP/stdout" || true)
+[ "$n_written" = 17 ] || { echo "stdout names $n_written PNGs, expected 17" >&2; fail=1; }
+
+echo "== exit statuses"
+set +e
+"$PY" "$SCRIPT" "$TMP/empty" >/dev/null 2>&1; rc_empty=$?
+"$PY" "$SCRIPT" "$TMP/missing_dir" >/dev/null 2>&1; rc_missing=$?
+"$PY" "$SCRIPT" "$TMP/a" --p-range 50 0 >/dev/null 2>&1; rc_bad=$?
+"$PY" "$SCRIPT" >/dev/null 2>&1; rc_none=$?
+set -e
+[ "$rc_empty" = 1 ] || { echo "empty OUTDIR: exit $rc_empty, expected 1" >&2; fail=1; }
+[ "$rc_missing" = 1 ] || { echo "missing OUTDIR: exit $rc_missing, expected 1" >&2; fail=1; }
+[ "$rc_bad" = 2 ] || { echo "bad --p-range: exit $rc_bad, expected 2" >&2; fail=1; }
+[ "$rc_none" = 2 ] || { echo "no OUTDIR: exit $rc_none, expected 2" >&2; fail=1; }
+
+if [ "$fail" = 0 ]; then echo "figures_smoke: PASS"; else echo "figures_smoke: FAIL" >&2; fi
+exit "$fail"

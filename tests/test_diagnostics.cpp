@@ -1,0 +1,96 @@
+// Diagnostics against hand-computed values: regional statistics, velocity-gradient measures,
+// front detection.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "engine/diagnostics.hpp"
+#include "engine/material.hpp"
+#include "engine/thermo.hpp"
+
+using namespace smpm;
+
+TEST_CASE("moments against hand-computed values", "[diagnostics]") {
+  // 1, 2, 3, 4, 10: mean 4, deviations -3 -2 -1 0 6: m2 = 50/5 = 10, m3 = (-27-8-1+216)/5 = 36,
+  // m4 = (81+16+1+1296)/5 = 278.8
+  const auto m = moments({1, 2, 3, 4, 10});
+  CHECK(m.mean == Approx(4.0));
+  CHECK(m.std == Approx(std::sqrt(10.0)));
+  CHECK(m.skew == Approx(36.0 / std::pow(10.0, 1.5)));
+  CHECK(m.kurt == Approx(278.8 / 100.0 - 3.0));
+  // a symmetric two-point distribution: skew 0, excess kurtosis -2
+  const auto b = moments({-1, 1, -1, 1});
+  CHECK(b.skew == Approx(0.0).margin(1e-15));
+  CHECK(b.kurt == Approx(-2.0));
+  // constant: no spread, no shape
+  const auto c = moments({5, 5, 5});
+  CHECK(c.std == 0.0);
+  CHECK(c.skew == 0.0);
+  CHECK(c.kurt == 0.0);
+}
+
+TEST_CASE("velocity-gradient measures: rigid rotation and uniform expansion", "[diagnostics]") {
+  const double w = 3.0;  // rigid rotation v = w (-y, x): L = [[0, -w], [w, 0]]
+  const auto r = gradient_measures(0.0, -w, w, 0.0);
+  CHECK(std::sqrt(r.R2) == Approx(2 * w));  // |curl v| = 2 omega
+  CHECK(r.D2 == 0.0);
+  CHECK(r.S2 == 0.0);                        // no strain rate in a rigid rotation
+  const double a = 0.7;  // uniform expansion v = a (x, y): L = a I
+  const auto e = gradient_measures(a, 0.0, 0.0, a);
+  CHECK(std::sqrt(e.D2) == Approx(2 * a));   // div v = 2 a in 2D
+  CHECK(e.R2 == 0.0);
+  CHECK(e.S2 == Approx(2 * a * a));          // D:D = a^2 + a^2
+}
+
+TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
+  Particles P;
+  P.resize(6);
+  P.y = {0.5e-6, 150e-6, 250e-6, 350e-6, 700e-6, 150e-6};
+  P.p = {9, 1e9, 2e9, 3e9, 4e9, 5e9};
+  P.vy = {0, -1, -2, -3, -4, -5};
+  P.body = {0, 0, 0, 0, 0, 1};  // the last one belongs to another body
+  for (std::size_t i = 0; i < 6; ++i) {
+    P.m[i] = 2.7e-9;
+    P.V[i] = 1e-12;
+  }
+  P.Lxx[1] = 1e6;  // div 1e6/s on one particle of region III
+  Material m;
+  m.rho0 = 2700;
+  m.E = 69e9;
+  m.nu = 0.33;
+  const std::vector<Thermo> th{Thermo(m)};
+  const std::vector<Region> regions{{"I", 100e-6, 900e-6, 0}, {"III", 100e-6, 300e-6, 0}};
+  const auto s = region_stats(P, regions, th, {m}, {0, 0});
+  REQUIRE(s.size() == 2);
+  CHECK(s[0].count == 4);  // 150, 250, 350, 700 um of body 0
+  CHECK(s[0].P.mean == Approx(2.5e9));
+  CHECK(s[0].Uy.mean == Approx(-2.5));
+  CHECK(s[0].rho.mean == Approx(2700.0));
+  CHECK(s[1].count == 2);  // 150, 250 um
+  CHECK(s[1].P.mean == Approx(1.5e9));
+  CHECK(s[1].P.std == Approx(0.5e9));
+  CHECK(s[1].D2 == Approx(1e12 / 2));  // mean over the region's 2 particles
+  CHECK(s[0].T.mean == Approx(300.0));  // no energy field: T0
+}
+
+TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
+  // a body moving at -1000 m/s, stopped below y = 412.5 um (rows of 5 um): the half-jump level is
+  // crossed between the last stopped row centre and the first moving one
+  Particles P;
+  const int rows = 200;
+  P.resize(rows);
+  for (int r = 0; r < rows; ++r) {
+    P.y[r] = (r + 0.5) * 5e-6;
+    P.vy[r] = P.y[r] < 412.5e-6 ? 0.0 : -1000.0;
+    P.body[r] = 0;
+  }
+  const double y = front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true);
+  // rows 81 (centre 407.5 um, stopped) and 82 (412.5, moving): level 500 m/s is midway
+  CHECK(y * 1e6 == Approx(410.0));
+  // a linear ramp over 10 rows: the 50 % point
+  for (int r = 0; r < rows; ++r) P.vy[r] = -1000.0 * std::clamp((r - 100) / 10.0, 0.0, 1.0);
+  const double y2 = front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true);
+  CHECK(y2 * 1e6 == Approx((105 + 0.5) * 5.0));
+}
