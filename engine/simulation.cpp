@@ -265,10 +265,19 @@ void Simulation::update_stress() {
   double vmax = 0.0;
   auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
   const kern::ConstitutiveState state{opt(P_.e), opt(P_.epsp), opt(P_.q), opt(P_.wp)};
-  kern::ConstitutiveParams params{dt_, -1e300, grid_.geom.h, cfg_.av_linear, cfg_.av_quadratic};
+  kern::ConstitutiveParams params;
+  params.dt = dt_;
+  params.av_length = grid_.geom.h;
+  params.av_linear = cfg_.av_linear;
+  params.av_quadratic = cfg_.av_quadratic;
   for (std::size_t k = 0; k < materials_.size(); ++k) {
     const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
-    params.p_min = materials_[k].spall_strength > 0.0 ? -materials_[k].spall_strength : -1e300;
+    // spall: tension below -spall_strength, or expansion past rho0 / 2, fractures a point. The
+    // second catches hot debris whose energy term keeps the pressure up: at rho = 1e-5 rho0 its
+    // Mie-Grueneisen sound speed reached 1e8 m/s and stalled a porous run at dt = 1e-5 ns.
+    const bool spall = materials_[k].spall_strength > 0.0;
+    params.p_min = spall ? -materials_[k].spall_strength : -1e300;
+    params.rho_min = spall ? 0.5 * materials_[k].rho0 : 0.0;
     const auto r = with_material(materials_[k], [&](const auto& eos, const auto& str) {
       return kern::constitutive_update(pv, state, n, params, eos, str, sel);
     });
