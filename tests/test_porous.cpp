@@ -100,7 +100,7 @@ TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verificat
   }
   WARN("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
   CHECK(finite);
-  // Kinetic + internal energy drifts down steadily, by 3.3 % over 100 ns here (the dense
+  // Kinetic + internal energy drifts down steadily, by 3.2 % over 100 ns here (the dense
   // impact: 0.06 %). It does not change with cfl, so it is not the USL step's O(dt) error; its
   // source is open (docs/verification.md). Bound at 5 %, which the drift stays well inside.
   CHECK(worst < 0.05);
