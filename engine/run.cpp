@@ -161,6 +161,12 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     c << scene.resolved << "\n";
   }
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
+  // a run owns its output directory: snapshots of an earlier run there would mix with this one's
+  if (std::filesystem::is_directory(out / "fields"))
+    for (const auto& f : std::filesystem::directory_iterator(out / "fields")) {
+      const std::string name = f.path().filename().string();
+      if (name.rfind("snap_", 0) == 0 && f.path().extension() == ".h5") std::filesystem::remove(f.path());
+    }
   SnapshotWriter snaps(out / "fields");
   auto snapshot = [&] { snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps()); };
   // the compression front runs through the target: the body named "target", else body 0
