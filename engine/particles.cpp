@@ -1,5 +1,7 @@
 #include "engine/particles.hpp"
 
+#include <utility>
+
 #include "kernels/sort.hpp"
 
 namespace smpm {
@@ -62,6 +64,17 @@ std::size_t Particles::bytes() const {
   std::size_t b = 0;
   for_each_double(const_cast<Particles&>(*this), [&](std::vector<double>& v) { b += v.capacity() * sizeof(double); });
   return b + id.capacity() * sizeof(std::uint32_t) + body.capacity();
+}
+
+std::vector<std::string> Particles::fields_in_use() const {
+  std::vector<std::string> names{"x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "Lxx", "Lxy", "Lyx", "Lyy"};
+  const std::pair<const char*, const std::vector<double>*> optional[] = {
+      {"Cxx", &Cxx}, {"Cxy", &Cxy}, {"Cyx", &Cyx}, {"Cyy", &Cyy}, {"e", &e}, {"epsp", &epsp}, {"q", &q}, {"wp", &wp}};
+  for (const auto& [name, v] : optional)
+    if (!v->empty()) names.emplace_back(name);
+  names.emplace_back("id");
+  names.emplace_back("body");
+  return names;
 }
 
 void Particles::append(const Particles& o) {

@@ -39,6 +39,8 @@ struct Particles {
                std::vector<std::uint32_t>& scratch_u);
   // Resident bytes of all particle arrays.
   std::size_t bytes() const;
+  // Names of the arrays in use (the optional ones only when allocated), as in this struct.
+  std::vector<std::string> fields_in_use() const;
   void append(const Particles& o);
 };
 

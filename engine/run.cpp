@@ -1,6 +1,7 @@
 #include "engine/run.hpp"
 
 #include <omp.h>
+#include <sys/resource.h>
 
 #include <atomic>
 #include <csignal>
@@ -21,6 +22,21 @@ namespace {
 
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_sigint(int) { g_interrupted = true; }
+
+// Peak resident set size of the process [bytes] (Linux reports KiB).
+long long peak_rss_bytes() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<long long>(u.ru_maxrss) * 1024;
+}
+
+// Adds the wall-clock seconds of its scope to an accumulator.
+struct ScopeTimer {
+  double& acc;
+  double t0 = omp_get_wtime();
+  explicit ScopeTimer(double& a) : acc(a) {}
+  ~ScopeTimer() { acc += omp_get_wtime() - t0; }
+};
 
 std::string hms(double s) {
   if (!std::isfinite(s) || s < 0) return "--:--:--";
@@ -85,9 +101,19 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   t.insert("wall_seconds", s.wall_seconds);
   t.insert("particle_steps_per_s", s.particle_steps_per_s);
   t.insert("resident_bytes", static_cast<int64_t>(sim.bytes()));
+  t.insert("particle_bytes_per_particle",
+           double(sim.particles().bytes()) / double(std::max<std::size_t>(1, sim.particles().size())));
+  t.insert("peak_rss_bytes", static_cast<int64_t>(peak_rss_bytes()));
+  toml::array fields;
+  for (const auto& f : sim.particles().fields_in_use()) fields.push_back(f);
+  t.insert("particle_fields", std::move(fields));
   const auto& pt = sim.phase_times();
-  t.insert("phase_seconds", toml::table{{"sort", pt.sort}, {"p2g", pt.p2g}, {"grid", pt.grid}, {"g2p", pt.g2p},
-                                        {"constitutive", pt.constitutive}, {"heat", pt.heat}});
+  // the step's phases, then the run loop's diagnostics (energy, front, wall, series rows) and
+  // output (snapshots, series.h5, run.json); wall_seconds covers all of them
+  t.insert("phase_seconds", toml::table{{"sort", pt.sort}, {"p2g", pt.p2g}, {"grid", pt.grid},
+                                        {"contact", pt.contact}, {"g2p", pt.g2p}, {"constitutive", pt.constitutive},
+                                        {"heat", pt.heat}, {"diagnostics", s.diagnostics_seconds},
+                                        {"output", s.output_seconds}});
   toml::array bodies;
   for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
     const auto& b = scene.bodies[k];
@@ -106,6 +132,11 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
     bodies.push_back(std::move(bt));
   }
   t.insert("bodies", std::move(bodies));
+  toml::array regions;  // the regions of series.csv, in its order
+  for (const auto& r : scene.regions)
+    regions.push_back(toml::table{{"name", r.name}, {"y_range_um", toml::array{r.y0 * 1e6, r.y1 * 1e6}},
+                                  {"body", static_cast<int64_t>(r.body)}});
+  t.insert("regions", std::move(regions));
   t.insert("case_resolved", scene.resolved);
   const auto tmp = file.string() + ".tmp";
   {
@@ -168,7 +199,11 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       if (name.rfind("snap_", 0) == 0 && f.path().extension() == ".h5") std::filesystem::remove(f.path());
     }
   SnapshotWriter snaps(out / "fields");
-  auto snapshot = [&] { snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps()); };
+  RunSummary s;
+  auto snapshot = [&] {
+    ScopeTimer t(s.output_seconds);
+    snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+  };
   // the compression front runs through the target: the body named "target", else body 0
   const std::size_t target = scene.target;
   // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
@@ -185,6 +220,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   std::string region_names;
   for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
   auto write_series = [&] {
+    ScopeTimer t(s.diagnostics_seconds);
     const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material());
     for (std::size_t r = 0; r < stats.size(); ++r) {
       const auto& st = stats[r];
@@ -202,6 +238,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     }
   };
   auto write_series_h5 = [&] {
+    ScopeTimer t(s.output_seconds);
     write_table_h5(out / "series.h5", "series", columns, table,
                    {{"regions", region_names}, {"region_column", "index into the regions attribute"},
                     {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2"}});
@@ -214,6 +251,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   }
   auto write_front = [&] {
     if (vy0 == 0.0) return;
+    ScopeTimer t(s.diagnostics_seconds);
     const auto& g = scene.geom;
     const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
     if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
@@ -228,12 +266,12 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     wall << "time_ns,wall_stress_GPa\n" << std::setprecision(10);
   }
   auto write_energy = [&] {
+    ScopeTimer t(s.diagnostics_seconds);
     const auto e = sim.energy();
     const auto q = sim.momentum();
     energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
            << q[1] << '\n';
   };
-  RunSummary s;
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads);
   std::signal(SIGINT, on_sigint);
@@ -265,8 +303,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       }
       sim.step(t_end - sim.time());
       particle_steps += n;
-      if (has_wall)
+      if (has_wall) {
+        ScopeTimer t(s.diagnostics_seconds);
         wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
+      }
       if (sim.time() >= next_energy - eps) {
         write_energy();
         write_front();
@@ -300,14 +340,15 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   }
   s.steps = sim.steps();
   s.end_time = sim.time();
-  s.wall_seconds = omp_get_wtime() - wall0;
-  s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
   // final state, whatever happened
   write_energy();
   write_series();
   series.flush();
   write_series_h5();
   snapshot();
+  // wall time of the whole loop, first and last snapshots included
+  s.wall_seconds = omp_get_wtime() - wall0;
+  s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
   write_run_json(out / "run.json", scene, sim, s, threads);
   if (!opt.quiet) {
     std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",

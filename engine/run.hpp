@@ -22,6 +22,8 @@ struct RunSummary {
   double end_time = 0.0;
   double wall_seconds = 0.0;
   double particle_steps_per_s = 0.0;
+  double diagnostics_seconds = 0.0;  // energy, front, wall and series rows
+  double output_seconds = 0.0;       // snapshots and series.h5
 };
 
 RunSummary run_scene(Scene& scene, const RunOptions& opt);

@@ -5,11 +5,28 @@ usage: scripts/study_summary.py OUTDIR [OUTDIR ...] [--region I] [--times-ns 120
 
 Columns: porosity and impact speed (run.json); peak of the region's mean pressure and density
 (series.csv); mean temperature of the region at the given times (nearest row); compression-front
-speed (least-squares slope of front.csv over the first and the second half of the front's
-record, in the frame of the wall) and its attenuation (second / first); for each region the time
-the release from the free top arrives, taken as the first time after the region's peak pressure
-at which its mean U_y exceeds +5 % of the impact speed (the material behind the front is at rest
-in this frame; the release sets it moving up); the run's particles and wall time.
+speed and its attenuation (second / first, below); for each region the time the release from the
+free top arrives (below); the run's particles and wall time.
+
+Meeting time t_meet: the target (top y_top0, from run.json, falling at -v in the wall frame until
+the compaction wave reaches it) has a free top; the compaction front of front.csv meets it at the
+first record with front_y >= y_top0 - v t - 2 cells. After that front.csv no longer tracks a
+compaction front: front_position (engine/diagnostics.cpp) scans rows from the top, and once the
+top rows move (rebound of the released top, ejecta flying up) it returns the top of the plate or
+of the ejecta, which moves up at 0.4-2.5 km/s.
+
+Front speed: least-squares slope of front.csv, in the frame of the wall, over the first and the
+second half of the record before t_meet (the whole record when the front never meets the top).
+
+Release: the rarefaction from the free top starts at t_meet and runs down through the compacted
+material, so it reaches the regions from above (I, top 900 um, before II, 600 um, before III,
+300 um) and, once there, sets the material (at rest behind the front in this frame) moving up for
+good. A region's release time is the first series.csv time t that is (1) at or after t_meet,
+(2) at or after the release time of the region above it, and (3) from which the region's mean U_y
+stays above +5 % of the impact speed for 100 ns, or to the end of the record if that comes sooner
+but at least 30 ns after t. Reverberations (thin region III, 600-700 ns) and the fluctuations of
+coarse-void runs (+-100 m/s with 20 um voids) fail (1) and (3). "n/a": no release within the
+record (the front has not met the top, or the release has not reached the region by the end).
 """
 import argparse
 import csv
@@ -36,6 +53,39 @@ def slope(t, y):
     return (n * sty - st * sy) / d if d else float("nan")
 
 
+# upper bounds of the engine's default regions (engine/scene.cpp) [um], for runs whose run.json
+# predates its "regions" entry
+REGION_TOP_UM = {"I": 900.0, "II": 600.0, "III": 300.0}
+HOLD_NS, MIN_HOLD_NS = 100.0, 30.0
+
+
+def meeting_time(run, body, v, ft, fy):
+    """First front.csv time at which the front reaches the free top (None: never)."""
+    cr = run.get("case_resolved", {})
+    top0 = None
+    for b in cr.get("bodies", []):
+        if b.get("name") == body.get("name") and b.get("y_range_um"):
+            top0 = b["y_range_um"][1]
+    if top0 is None:
+        return None
+    tol = 2.0 * cr.get("grid", {}).get("cell_size_um", 4.0)
+    return next((t for t, y in zip(ft, fy) if y >= top0 - v * t * 1e-3 - tol), None)
+
+
+def release_time(t, uy, level, t_from):
+    """First t >= t_from from which uy stays above level for HOLD_NS (or to the end, >= MIN_HOLD_NS)."""
+    end = t[-1] if t else 0.0
+    for i, ti in enumerate(t):
+        if ti < t_from or uy[i] <= level:
+            continue
+        stop = min(ti + HOLD_NS, end)
+        if stop - ti < MIN_HOLD_NS:
+            return None
+        if all(u > level for tj, u in zip(t[i:], uy[i:]) if tj <= stop):
+            return ti
+    return None
+
+
 def summarise(outdir, region, times):
     run = json.load(open(os.path.join(outdir, "run.json")))
     body = run["bodies"][0]
@@ -45,6 +95,7 @@ def summarise(outdir, region, times):
     v = abs(body["velocity_m_s"][1])
     series = read_csv(os.path.join(outdir, "series.csv"))
     regions = sorted({r["region"] for r in series})
+    regions_seen = list(dict.fromkeys(r["region"] for r in series))
     rows = [r for r in series if r["region"] == region]
     out = {"case": run["case"], "porosity": body.get("porosity", 0.0), "v": v,
            "particles": run["particles"], "wall_min": run["wall_seconds"] / 60.0, "status": run["status"],
@@ -58,18 +109,27 @@ def summarise(outdir, region, times):
     front = read_csv(os.path.join(outdir, "front.csv"))
     ft = [float(r["time_ns"]) for r in front]
     fy = [float(r["front_y_um"]) for r in front]
-    h = len(ft) // 2
+    t_meet = meeting_time(run, body, v, ft, fy)
+    out["t_meet"] = t_meet
+    n = sum(1 for t in ft if t_meet is None or t < t_meet)  # the compaction front's own record
+    h = n // 2
     out["front1"] = slope(ft[:h], fy[:h]) * 1e3  # um/ns -> m/s
-    out["front2"] = slope(ft[h:], fy[h:]) * 1e3
+    out["front2"] = slope(ft[h:n], fy[h:n]) * 1e3
     out["atten"] = out["front2"] / out["front1"] if out["front1"] else float("nan")
     out["release"] = {}
-    for reg in regions:
+    # from the top down: regions with a higher upper bound first (series order when unknown)
+    tops = dict(REGION_TOP_UM)
+    tops.update({r["name"]: r["y_range_um"][1] for r in run.get("regions", [])})  # run.json, newer runs
+    order = sorted(regions, key=lambda g: (-tops.get(g, float("-inf")), regions_seen.index(g)))
+    t_above = t_meet if front else 0.0
+    for reg in order:
         rr = [r for r in series if r["region"] == reg]
-        if not rr:
-            continue
-        k = max(range(len(rr)), key=lambda i: float(rr[i]["P_mean_GPa"]))
-        arr = next((float(r["time_ns"]) for r in rr[k:] if float(r["Uy_mean_ms"]) > 0.05 * v), None)
+        arr = None
+        if t_above is not None and rr:
+            arr = release_time([float(r["time_ns"]) for r in rr], [float(r["Uy_mean_ms"]) for r in rr],
+                               0.05 * v, t_above)
         out["release"][reg] = arr
+        t_above = arr
     return out, regions
 
 

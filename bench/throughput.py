@@ -1,0 +1,254 @@
+#!/usr/bin/python3
+"""Whole-run throughput harness: the standard scenes of cases/bench/ at about 1e5, 1e6 and 4e6
+particles, with 1 and 2 threads, against this machine's measured roofs.
+
+For every scene, size and thread count it runs `shockmpm run` for a fixed number of steps and
+reads run.json: particle-steps/s, wall seconds per phase (sort, P2G, grid update, contact,
+G2P, constitutive update, heat, diagnostics, output), resident bytes per particle, peak RSS.
+In the same session it runs bench/machine_roofs (STREAM-like triad, FMA throughput) with 1 and
+2 threads, and prints, per phase, the bytes and flops per particle-step of the kernel (the
+model below) and the fraction of its roof the phase reaches:
+    roof time per particle-step = max(bytes / triad bandwidth, flops / FMA throughput)
+    fraction = roof time / measured time          (1.0: at the roof)
+
+Usage (from the repository root, on a quiet machine: nothing else running):
+    /usr/bin/python3 bench/throughput.py                          # everything, about 15 min
+    /usr/bin/python3 bench/throughput.py --scenes dense_shock --sizes 1e6 --threads 2
+Writes bench/results/throughput-STAMP.json (every run.json, the roofs) and -STAMP.md (tables),
+and prints the tables. Builds build/ (Release) first unless --no-build.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+# The one key that sets each scene's particle count, and its value for each size (the case
+# files' comments list the same values).
+SCENES = {
+    "elastic_block": ("grid.cell_size_m", {"1e5": 0.0025, "1e6": 0.0008, "4e6": 0.0004}),
+    "dense_shock": ("grid.cell_size_um", {"1e5": 4.0, "1e6": 1.25, "4e6": 0.625}),
+    "porous_shock": ("grid.cell_size_um", {"1e5": 2.5, "1e6": 0.8, "4e6": 0.4}),
+}
+PHASES = ["sort", "p2g", "grid", "contact", "g2p", "constitutive", "heat", "diagnostics", "output"]
+
+# ---- the per-phase traffic and flop model ---------------------------------------------------
+# Bytes: compulsory DRAM traffic per particle-step, each array streamed once per phase: 8 B per
+# double read, 8 B per double written, and 8 B more for a write to an array the phase does not
+# read (write-allocate). Grid arrays count per node and are divided by particles per node.
+# Flops: hand counts of the kernels' arithmetic (kernels/transfer.hpp, constitutive.hpp),
+# additions and multiplications, an FMA as two, a division or square root as one; shape
+# function evaluation counted per axis. They are estimates to +-30 %, stated as such.
+SHAPE_N = {"linear": 2, "ugimp": 3, "quadratic": 3, "cubic": 4}
+SHAPE_EVAL_FLOPS = {"linear": 6, "ugimp": 30, "quadratic": 20, "cubic": 40}  # per axis
+
+
+def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
+    """(bytes, flops) per particle-step of one phase."""
+    has = set(fields)
+    apic = "Cxx" in has
+    heat = apic and "e" in has       # the APIC gather heats the particles (transfer dissipation)
+    flip = cfg["transfer"] == "flip"
+    N = SHAPE_N[cfg["shape"]]
+    nodes = N * N
+    ev = 2 * SHAPE_EVAL_FLOPS[cfg["shape"]]
+    npp = nodes_per_particle
+    ndouble = sum(1 for f in fields if f not in ("id", "body"))
+
+    def rd(*names):
+        return 8 * sum(1 for n in names if n in has)
+
+    def rw(*names):
+        return 16 * sum(1 for n in names if n in has)
+
+    if phase == "sort":
+        # keys from x, y (write key 4 B + allocate), histogram and stable scatter (read key
+        # twice, write order 4 B + allocate), and every permute_every steps the physical
+        # permutation of all arrays (read + write each, plus the id and body arrays)
+        b = 16 + 8 + 8 + 8
+        if permute_every > 0:
+            b += (16 * ndouble + 8 + 2) / permute_every
+        return b, 12
+    if phase == "p2g":
+        # order index, x, y, vx, vy, m, V, stress (4), q, C (4); grid: clear 5 arrays, then
+        # the tile flush reads and writes 5 arrays per node
+        b = 4 + rd("x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "q", "Cxx", "Cxy", "Cyx", "Cyy")
+        b += npp * (5 * 8 + 5 * 16)
+        per_node = 1 + (8 if apic else 0) + 4 + 2 + 4 + 8 + 2  # w, affine, momentum, mass, grad, force
+        return b, ev + 30 + nodes * per_node
+    if phase == "grid":
+        # read m, px, py, fx, fy; write vx, vy (and dvx, dvy for FLIP), write-allocate
+        return npp * (5 * 8 + (4 if flip else 2) * 16), npp * 14
+    if phase == "contact":
+        return npp * 2 * (8 * 8 + 4 * 16), npp * 60
+    if phase == "g2p":
+        # reads x, y; writes x, y, v, L, C; heat: reads v, C, e too, and m, px, py of the grid
+        b = 2 * 16 + 2 * (8 if (heat or flip) else 16) + 8 * 2 * 4  # x y rw, v, L (write-allocate)
+        b += rw("Cxx", "Cxy", "Cyx", "Cyy") if heat else 16 * 4 * apic
+        if heat:
+            b += rw("e")
+        b += npp * 8 * (2 + (3 if heat else 0) + (2 if flip else 0))
+        per_node = 1 + 4 + 8 + (8 if (apic and cfg["shape"] == "linear") else 0)
+        if heat:
+            per_node += 18
+        if flip:
+            per_node += 4
+        return b, ev + 40 + nodes * per_node
+    if phase == "constitutive":
+        # L (4) read, V rw, m read, stress (3) rw, p rw, v read, optional e, epsp, wp rw, q write
+        b = rd("Lxx", "Lxy", "Lyx", "Lyy", "m", "vx", "vy") + rw("V", "sxx", "syy", "sxy", "p", "e", "epsp", "wp")
+        b += rw("q")
+        flops = 60  # Jaumann trial, volume, rho, signal speed (one sqrt), max
+        if "epsp" in has:
+            flops += 25  # von Mises and the return
+        if "e" in has:
+            flops += 40  # Mie-Grueneisen cold curve and the centred energy update
+        if "q" in has:
+            flops += 15
+        return b, flops
+    if phase == "heat":
+        return 0, 0
+    return None, None  # diagnostics, output: not modelled
+
+
+def run_one(binary, scene, key, value, steps, threads, workdir):
+    out = Path(workdir) / f"{scene}-{value}-t{threads}"
+    cmd = [str(binary), "run", str(ROOT / "cases" / "bench" / f"{scene}.toml"), "--out", str(out), "--quiet",
+           "--set", f"{key}={value}", "--set", f"run.max_steps={steps}"]
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    t0 = time.time()
+    subprocess.run(cmd, check=True, env=env, stdout=subprocess.DEVNULL)
+    wall = time.time() - t0
+    with open(out / "run.json") as f:
+        r = json.load(f)
+    r["process_wall_seconds"] = wall
+    r["command"] = f"OMP_NUM_THREADS={threads} " + " ".join(cmd[:3] + cmd[5:]).replace(str(ROOT) + "/", "")
+    return r
+
+
+def roofs(binary_dir, threads):
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads))
+    out = subprocess.run([str(binary_dir / "bench" / "machine_roofs")], check=True, env=env, capture_output=True,
+                         text=True).stdout
+    return json.loads(out)
+
+
+def solver_cfg(run):
+    """shape and transfer from the resolved case in run.json."""
+    s = run["case_resolved"].get("solver", {})
+    return {"shape": s.get("shape", "quadratic"), "transfer": s.get("transfer", "apic"),
+            "permute_every": s.get("permute_every", 20)}
+
+
+def tables(results, roof):
+    lines = []
+    lines.append("Machine roofs (bench/machine_roofs, best of 10): " + ", ".join(
+        f"{t} thread{'s' if t > 1 else ''}: triad {roof[t]['triad_GB_s']:.1f} GB/s, FMA {roof[t]['fma_GFLOP_s']:.1f} GFLOP/s"
+        for t in sorted(roof)))
+    lines.append("")
+    lines.append("| scene | particles | steps | M particle-steps/s, 1 thread | 2 threads | 2/1 | particle B/particle | "
+                 "resident B/particle | peak RSS MiB | diagnostics + output % |")
+    lines.append("|---|---|---|---|---|---|---|---|---|---|")
+    keyed = {}
+    for r in results:
+        keyed[(r["scene"], r["size"], r["threads"])] = r
+    for (scene, size) in sorted({(r["scene"], r["size"]) for r in results}, key=lambda k: (k[0], float(k[1]))):
+        r1, r2 = keyed.get((scene, size, 1)), keyed.get((scene, size, 2))
+        r = r2 or r1
+        v1 = r1["particle_steps_per_s"] * 1e-6 if r1 else float("nan")
+        v2 = r2["particle_steps_per_s"] * 1e-6 if r2 else float("nan")
+        ph = r["phase_seconds"]
+        do = 100 * (ph["diagnostics"] + ph["output"]) / r["wall_seconds"]
+        lines.append(f"| {scene} | {r['particles']:,} | {r['steps']} | {v1:.2f} | {v2:.2f} | {v2 / v1:.2f} | "
+                     f"{r['particle_bytes_per_particle']:.0f} | {r['resident_bytes'] / r['particles']:.0f} | "
+                     f"{r['peak_rss_bytes'] / 2**20:.0f} | {do:.1f} |")
+    lines.append("")
+    lines.append("Per phase: ns per particle-step (measured), model bytes and flops per particle-step, and the "
+                 "fraction of the roof reached (roof time / measured time).")
+    lines.append("")
+    lines.append("| scene | particles | threads | phase | ns/p-step | B/p-step | flop/p-step | bound | roof fraction |")
+    lines.append("|---|---|---|---|---|---|---|---|---|")
+    for r in sorted(results, key=lambda r: (r["scene"], float(r["size"]), r["threads"])):
+        n = r["particles"] * r["steps"]
+        cfg = r["solver"]
+        npp = r["nodes"] / r["particles"]
+        R = roof[r["threads"]]
+        for ph in PHASES:
+            t = r["phase_seconds"].get(ph, 0.0)
+            if t <= 0.0:
+                continue
+            ns = t / n * 1e9
+            b, f = traffic(ph, r["particle_fields"], cfg, npp, cfg["permute_every"])
+            if b is None:
+                lines.append(f"| {r['scene']} | {r['particles']:,} | {r['threads']} | {ph} | {ns:.2f} | - | - | - | - |")
+                continue
+            tb = b / (R["triad_GB_s"] * 1e9) * 1e9
+            tf = f / (R["fma_GFLOP_s"] * 1e9) * 1e9
+            bound = "memory" if tb >= tf else "flops"
+            lines.append(f"| {r['scene']} | {r['particles']:,} | {r['threads']} | {ph} | {ns:.2f} | {b:.0f} | {f:.0f} | "
+                         f"{bound} | {max(tb, tf) / ns:.2f} |")
+    return "\n".join(lines)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated, from " + ", ".join(SCENES))
+    ap.add_argument("--sizes", default="1e5,1e6,4e6", help="comma-separated, from 1e5, 1e6, 4e6")
+    ap.add_argument("--threads", default="1,2", help="comma-separated thread counts")
+    ap.add_argument("--particle-steps", type=float, default=2e8,
+                    help="particle-steps per run: steps = this / particles, within [20, 300] (default 2e8)")
+    ap.add_argument("--build-dir", default=str(ROOT / "build"))
+    ap.add_argument("--no-build", action="store_true")
+    ap.add_argument("--keep", help="keep the runs' output directories here (default: a temporary directory)")
+    a = ap.parse_args()
+    build = Path(a.build_dir)
+    if not a.no_build:
+        subprocess.run(["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release"], check=True,
+                       stdout=subprocess.DEVNULL)
+        subprocess.run(["cmake", "--build", str(build), "--target", "shockmpm", "machine_roofs", "-j", "2"], check=True,
+                       stdout=subprocess.DEVNULL)
+    threads = [int(t) for t in a.threads.split(",")]
+    roof = {t: roofs(build, t) for t in threads}
+    results = []
+    work = a.keep or tempfile.mkdtemp(prefix="smpm-throughput-")
+    for scene in a.scenes.split(","):
+        if scene not in SCENES:
+            sys.exit(f"--scenes: unknown scene '{scene}' (allowed: {', '.join(SCENES)})")
+        key, sizes = SCENES[scene]
+        for size in a.sizes.split(","):
+            if size not in sizes:
+                sys.exit(f"--sizes: unknown size '{size}' (allowed: {', '.join(sizes)})")
+            value = sizes[size]
+            for t in threads:
+                # particles from the first run; steps from the budget
+                n_est = float(size)
+                steps = int(min(300, max(20, a.particle_steps / n_est)))
+                print(f"== {scene} {size} ({key}={value}), {t} thread(s), {steps} steps", file=sys.stderr, flush=True)
+                r = run_one(build / "shockmpm", scene, key, value, steps, t, work)
+                if r["status"] != "completed":
+                    sys.exit(f"{scene} {size}: run {r['status']}: {r['message']}")
+                r.update(scene=scene, size=size, solver=solver_cfg(r))
+                print(f"   {r['particles']:,} particles, {r['particle_steps_per_s'] * 1e-6:.2f} M particle-steps/s",
+                      file=sys.stderr, flush=True)
+                results.append(r)
+    text = tables(results, roof)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    outdir = ROOT / "bench" / "results"
+    outdir.mkdir(parents=True, exist_ok=True)
+    for r in results:
+        r.pop("case_resolved", None)
+    with open(outdir / f"throughput-{stamp}.json", "w") as f:
+        json.dump({"roofs": roof, "runs": results}, f, indent=1)
+    with open(outdir / f"throughput-{stamp}.md", "w") as f:
+        f.write(text + "\n")
+    print(text)
+    print(f"\n(bench/results/throughput-{stamp}.json, .md)", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
