@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 #include "engine/diagnostics.hpp"
 #include "kernels/heat.hpp"
@@ -236,9 +237,14 @@ void Simulation::gather_from_grid() {
     using kern::G2PWhat;
     const bool heat = transfer_heat();
     if (cfg_.scheme == Scheme::USL) {
-      if (flip) kern::g2p<S, true, G2PWhat::Full>(g, G, pv, n, q);
-      else if (heat) kern::g2p<S, false, G2PWhat::Full, true>(g, G, pv, n, q);
-      else kern::g2p<S, false, G2PWhat::Full>(g, G, pv, n, q);
+      auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
+        constexpr bool C = decltype(contact)::value;
+        if (flip) kern::g2p<S, true, G2PWhat::Full, false, C>(g, G, pv, n, q);
+        else if (heat) kern::g2p<S, false, G2PWhat::Full, true, C>(g, G, pv, n, q);
+        else kern::g2p<S, false, G2PWhat::Full, false, C>(g, G, pv, n, q);
+      };
+      if (cfg_.contact) usl(std::true_type{});
+      else usl(std::false_type{});
       return;
     }
     // MUSL: new particle velocities, remap their momentum to the grid, then move the

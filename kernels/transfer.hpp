@@ -109,7 +109,7 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
     vsyy = -Vh * (P.syy[p] - pq);
     vsxy = -Vh * P.sxy[p];
   }
-  const std::size_t foff = sink.field_offset(P.field(p));
+  const std::size_t foff = Contact ? sink.field_offset(P.field(p)) : 0;
   const double mh = m * inv_h, Vp = Contact ? P.V[p] : 0.0;
   for (int b = 0; b < N; ++b) {
     const std::size_t row = sink.row(bx, by + b) + foff;
@@ -253,7 +253,7 @@ struct G2PParams {
 // both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
 // error is what remains. Needs m, px, py of the scatter still on the grid (ghosts filled).
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
   constexpr int N = Shape::N;
@@ -273,7 +273,7 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     ux = P.vx[p]; uy = P.vy[p];
     uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
   }
-  const std::size_t foff = P.field(p) * G.fstride;
+  const std::size_t foff = Contact ? P.field(p) * G.fstride : 0;
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b) + foff;
     const double dy = (by + b) - yg;
@@ -353,11 +353,12 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
   }
 }
 
-// Parallel gather over particles in array order: race-free by construction.
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false>
+// Parallel gather over particles in array order: race-free by construction. Contact: particles
+// read their body's velocity field (a compile-time choice: the one-field path has no lookup).
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
 #pragma omp parallel for schedule(static)
-  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat>(g, G, P, p, q);
+  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact>(g, G, P, p, q);
 }
 
 }  // namespace smpm::kern

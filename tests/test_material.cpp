@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
 #include <toml++/toml.h>
 
 #include "engine/case_reader.hpp"
@@ -622,4 +623,29 @@ TEST_CASE("heat fraction: the stored share of plastic work does not heat", "[mat
   const double T09 = particle_temperature(P, 0, th, m);
   CHECK(T1 - T09 == Approx(0.1 * 8800.0 / 880.0).epsilon(1e-12));  // 1 K less
   CHECK(T1 == Approx(310.0).epsilon(1e-6));
+}
+
+TEST_CASE("Jaumann trial step and von Mises norm match the 2x2 matrix expressions", "[material]") {
+  // the kernel writes them out in scalars (SIMD-friendly); Eigen gives the reference
+  using Mat2 = Eigen::Matrix2d;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < 100; ++k) {
+    const double G = 26e9, dt = 1e-9;
+    const double sxx = 1e8 * u(rng), syy = 1e8 * u(rng), sxy = 1e8 * u(rng);
+    const double dxx = 1e7 * u(rng), dyy = 1e7 * u(rng), dxy = 1e7 * u(rng), w = 1e7 * u(rng);
+    const Mat2 s = (Mat2() << sxx, sxy, sxy, syy).finished();
+    const Mat2 D = (Mat2() << dxx, dxy, dxy, dyy).finished();
+    const Mat2 W = (Mat2() << 0.0, w, -w, 0.0).finished();
+    const Mat2 devD = D - (D.trace() / 3.0) * Mat2::Identity();
+    const Mat2 ref = s + dt * (2.0 * G * devD + W * s - s * W);
+    double a = sxx, b = syy, c = sxy;
+    kern::jaumann_trial(G, a, b, c, dxx, dyy, dxy, w, dt);
+    CHECK(a == Approx(ref(0, 0)).epsilon(1e-13).margin(1e-3));
+    CHECK(b == Approx(ref(1, 1)).epsilon(1e-13).margin(1e-3));
+    CHECK(c == Approx(ref(0, 1)).epsilon(1e-13).margin(1e-3));
+    CHECK(ref(0, 1) == Approx(ref(1, 0)).epsilon(1e-13).margin(1e-3));  // stays symmetric
+    const double szz = -s.trace();
+    CHECK(kern::von_mises(sxx, syy, sxy) == Approx(std::sqrt(1.5 * (s.squaredNorm() + szz * szz))).epsilon(1e-14));
+  }
 }
