@@ -649,3 +649,51 @@ TEST_CASE("Jaumann trial step and von Mises norm match the 2x2 matrix expression
     CHECK(kern::von_mises(sxx, syy, sxy) == Approx(std::sqrt(1.5 * (s.squaredNorm() + szz * szz))).epsilon(1e-14));
   }
 }
+
+TEST_CASE("A fractured point takes the work of the stress it carried, not of its trial deviator",
+          "[material][constitutive]") {
+  // A point expanded below rho0 / 2 (debris) with zero stress, stretching and shearing fast:
+  // the trial deviator of the step never acts, so its energy must not change. Then a point
+  // that fractures with a stress: it takes the centred work of that stress (old stress and 0).
+  const Material al = aluminium();
+  const auto eos = al.mie_gruneisen();
+  const kern::VonMisesStrength vm{al.shear_modulus(), al.Y0, al.H};
+  const double V0 = 1e-10;
+  double x = 0, y = 0, vx = 0, vy = 0, m = 0.4 * al.rho0 * V0, V = V0, sxx = 0, syy = 0, sxy = 0, p = 0;
+  double Lxx = 2e7, Lxy = 3e7, Lyx = -1e7, Lyy = 1e7;
+  double e = 1e5, epsp = 0.3, qv = 0;
+  const kern::ParticleView P{&x,   &y,   &vx,   &vy,   &m,      &V,      &sxx,    &syy,    &sxy,    &p,     &Lxx,
+                             &Lxy, &Lyx, &Lyy,  nullptr, nullptr, nullptr, nullptr, &qv, &e};
+  const kern::ConstitutiveState S{&e, &epsp, &qv, nullptr};
+  kern::ConstitutiveParams q;
+  q.dt = 1e-10;
+  q.p_min = -1e9;  // the library's spall strength (cases/materials.toml)
+  q.rho_min = 0.5 * al.rho0;
+  q.av_length = 4e-6;
+  q.av_linear = 0.06;
+  q.av_quadratic = 1.5;
+  for (int k = 0; k < 50; ++k) {
+    const auto r = kern::constitutive_update(P, S, 1, q, eos, vm);
+    REQUIRE(r.bad == -1);
+  }
+  CHECK(V > 1.1 * V0);  // still expanding
+  CHECK(e == 1e5);      // no energy from nothing (it was 1e14 J/kg in 400 ns before the fix)
+  CHECK(sxx == 0.0);
+  CHECK(syy == 0.0);
+  CHECK(sxy == 0.0);
+  CHECK(p == 0.0);
+
+  // fracture from a stressed state: energy changes by the centred work of the old stress
+  m = 0.55 * al.rho0 * V0;  // rho just above rho0 / 2: the expansion takes it below
+  V = V0;
+  sxx = 1e8, syy = -5e7, sxy = 2e7, p = -2e8;
+  e = 1e5;
+  Lxx = 5e8, Lxy = 0, Lyx = 0, Lyy = 5e8;  // fast expansion: rho drops below rho0 / 2
+  const double a0 = sxx, b0 = syy, c0 = sxy, P0 = p;
+  kern::constitutive_update(P, S, 1, q, eos, vm);
+  REQUIRE(m / V < q.rho_min);
+  const double dV = V - V0, dxy = 0.0;
+  const double expect = 1e5 + (q.dt * 0.5 * (V0 + V) * 0.5 * (a0 * Lxx + b0 * Lyy + 2 * c0 * dxy) - 0.5 * P0 * dV) / m;
+  CHECK(e == Approx(expect).epsilon(1e-14));
+  CHECK(p == 0.0);
+}
