@@ -12,7 +12,8 @@ model below) and the fraction of its roof the phase reaches:
     fraction = roof time / measured time          (1.0: at the roof)
 
 Usage (from the repository root, on a quiet machine: nothing else running):
-    /usr/bin/python3 bench/throughput.py                          # everything, about 15 min
+    /usr/bin/python3 bench/throughput.py                          # everything, about 10 min
+    /usr/bin/python3 bench/throughput.py --table bench/results/throughput-STAMP.json   # re-print
     /usr/bin/python3 bench/throughput.py --scenes dense_shock --sizes 1e6 --threads 2
 Writes bench/results/throughput-STAMP.json (every run.json, the roofs) and -STAMP.md (tables),
 and prints the tables. Builds build/ (Release) first unless --no-build.
@@ -98,7 +99,15 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
             per_node += 18
         if flip:
             per_node += 4
-        return b, ev + 40 + nodes * per_node
+        flops = ev + 40 + nodes * per_node
+        if cfg.get("scheme") == "musl":
+            # MUSL: the velocity gather above, then a momentum remap (scatter of m v: reads x, y,
+            # vx, vy, m, order; clears and adds px, py), grid velocity (reads m, px, py, writes
+            # vx, vy), and a second gather for position and L (reads x, y, grid v; writes x, y, L)
+            b += 4 + 40 + npp * (2 * 8 + 2 * 16) + npp * (3 * 8 + 2 * 16)
+            b += 2 * 16 + 8 * 2 * 4 + npp * 8 * 2
+            flops += 2 * ev + nodes * (1 + 4) + npp * 8 + nodes * (1 + 4 + 8)
+        return b, flops
     if phase == "constitutive":
         # L (4) read, V rw, m read, stress (3) rw, p rw, v read, optional e, epsp, wp rw, q write
         b = rd("Lxx", "Lxy", "Lyx", "Lyy", "m", "vx", "vy") + rw("V", "sxx", "syy", "sxy", "p", "e", "epsp", "wp")
@@ -142,7 +151,7 @@ def solver_cfg(run):
     """shape and transfer from the resolved case in run.json."""
     s = run["case_resolved"].get("solver", {})
     return {"shape": s.get("shape", "quadratic"), "transfer": s.get("transfer", "apic"),
-            "permute_every": s.get("permute_every", 20)}
+            "scheme": s.get("scheme", "usl"), "permute_every": s.get("permute_every", 20)}
 
 
 def tables(results, roof):
@@ -205,7 +214,16 @@ def main():
     ap.add_argument("--build-dir", default=str(ROOT / "build"))
     ap.add_argument("--no-build", action="store_true")
     ap.add_argument("--keep", help="keep the runs' output directories here (default: a temporary directory)")
+    ap.add_argument("--table", help="only re-print the tables of an earlier bench/results/throughput-*.json")
     a = ap.parse_args()
+    if a.table:
+        with open(a.table) as f:
+            d = json.load(f)
+        for r in d["runs"]:
+            # files written before the scheme was recorded: the scenes as in cases/bench
+            r["solver"].setdefault("scheme", "musl" if r["scene"] == "elastic_block" else "usl")
+        print(tables(d["runs"], {int(k): v for k, v in d["roofs"].items()}))
+        return
     build = Path(a.build_dir)
     if not a.no_build:
         subprocess.run(["cmake", "-S", str(ROOT), "-B", str(build), "-DCMAKE_BUILD_TYPE=Release"], check=True,
