@@ -11,7 +11,6 @@ struct Grid {
   std::vector<double> m, px, py, fx, fy, vx, vy, dvx, dvy;
 
   std::vector<double> gmx, gmy, vol;  // contact: mass gradient and volume per field
-  std::vector<double> ux, uy;         // APIC transfer heating: the scatter's velocity p / m
   int fields = 1;
 
   Grid() = default;
@@ -26,25 +25,19 @@ struct Grid {
     if (nfields > 1)
       for (auto* a : {&gmx, &gmy, &vol}) a->assign(nn, 0.0);
   }
-  // Keep p / m of the scatter (APIC transfer heating).
-  void enable_scatter_velocity() {
-    for (auto* a : {&ux, &uy}) a->assign(m.size(), 0.0);
-  }
   kern::GridView view() {
     auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
     kern::GridView G{m.data(), px.data(), py.data(), fx.data(), fy.data(), vx.data(), vy.data(), d(dvx), d(dvy)};
     G.gmx = d(gmx);
     G.gmy = d(gmy);
     G.vol = d(vol);
-    G.ux = d(ux);
-    G.uy = d(uy);
     G.fields = fields;
     G.fstride = fields > 1 ? geom.num_nodes() : 0;
     return G;
   }
   std::size_t bytes() const {
     std::size_t b = 0;
-    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy, &gmx, &gmy, &vol, &ux, &uy}) b += a->capacity() * sizeof(double);
+    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy, &gmx, &gmy, &vol}) b += a->capacity() * sizeof(double);
     return b;
   }
 };

@@ -56,7 +56,6 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
-  if (transfer_heat()) grid_.enable_scatter_velocity();
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);
@@ -211,9 +210,9 @@ void Simulation::update_grid() {
     const auto F = G.field(f);
     double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
     kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
-    if (transfer_heat()) {  // the heating gather reads the scatter's velocity
-      double* scatter[] = {F.ux, F.uy};
-      kern::fill_periodic_ghosts(g, scatter, 2);
+    if (transfer_heat()) {  // the heating gather reads the scatter's momenta
+      double* scatter[] = {F.m, F.px, F.py};
+      kern::fill_periodic_ghosts(g, scatter, 3);
     }
   }
   times_.grid += omp_get_wtime() - t0 - (times_.contact - contact0);

@@ -252,8 +252,7 @@ struct G2PParams {
 //   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
 // both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
-// error is what remains. Needs the scatter's velocity p_i / m_i on the grid (G.ux, G.uy, set by
-// grid_update, ghosts filled): one load per component and no division per node and particle.
+// error is what remains. Needs m, px, py of the scatter still on the grid (ghosts filled).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
@@ -286,9 +285,10 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
       vy += w * gvy;
       if constexpr (Heat) {
         v2 += w * (gvx * gvx + gvy * gvy);
+        const double mi = G.m[n], inv = mi > 0.0 ? 1.0 / mi : 0.0;
         const double dx = (bx + a) - xg;
-        const double rx = ux + uxx * dx + uxy * dy - G.ux[n];
-        const double ry = uy + uyx * dx + uyy * dy - G.uy[n];
+        const double rx = ux + uxx * dx + uxy * dy - G.px[n] * inv;
+        const double ry = uy + uyx * dx + uyy * dy - G.py[n] * inv;
         r2 += w * (rx * rx + ry * ry);
       }
       if constexpr (FLIP && What != G2PWhat::PositionGradient) {

@@ -45,16 +45,13 @@ struct GridView {
   double* dvx; double* dvy;  // v_new - v_old, for FLIP (may be null when unused)
   // contact only (null otherwise): mass gradient sum_p m_p grad w_ip [kg/m^2], volume sum w V
   double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr;
-  // APIC transfer heating only (null otherwise): the scatter's velocity p / m (0 where m = 0),
-  // before forces and walls, for the gather's dissipation share
-  double* ux = nullptr; double* uy = nullptr;
   std::size_t fstride = 0;  // num_nodes() with two fields, 0 with one
   int fields = 1;
   // The view of field f alone (a one-field view into the same storage).
   GridView field(int f) const {
     GridView v = *this;
     const std::size_t o = static_cast<std::size_t>(f) * fstride;
-    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol, &v.ux, &v.uy})
+    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol})
       if (*a) *a += o;
     v.fstride = 0;
     v.fields = 1;
