@@ -15,6 +15,7 @@
 #include "engine/diagnostics.hpp"
 #include "engine/output.hpp"
 #include "engine/thermo.hpp"
+#include "engine/timer.hpp"
 
 namespace smpm {
 
@@ -29,14 +30,6 @@ long long peak_rss_bytes() {
   getrusage(RUSAGE_SELF, &u);
   return static_cast<long long>(u.ru_maxrss) * 1024;
 }
-
-// Adds the wall-clock seconds of its scope to an accumulator.
-struct ScopeTimer {
-  double& acc;
-  double t0 = omp_get_wtime();
-  explicit ScopeTimer(double& a) : acc(a) {}
-  ~ScopeTimer() { acc += omp_get_wtime() - t0; }
-};
 
 std::string hms(double s) {
   if (!std::isfinite(s) || s < 0) return "--:--:--";
@@ -201,7 +194,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   SnapshotWriter snaps(out / "fields");
   RunSummary s;
   auto snapshot = [&] {
-    ScopeTimer t(s.output_seconds);
+    Timed t(s.output_seconds);
     snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
   };
   // the compression front runs through the target: the body named "target", else body 0
@@ -220,7 +213,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   std::string region_names;
   for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
   auto write_series = [&] {
-    ScopeTimer t(s.diagnostics_seconds);
+    Timed t(s.diagnostics_seconds);
     const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material());
     for (std::size_t r = 0; r < stats.size(); ++r) {
       const auto& st = stats[r];
@@ -238,7 +231,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     }
   };
   auto write_series_h5 = [&] {
-    ScopeTimer t(s.output_seconds);
+    Timed t(s.output_seconds);
     write_table_h5(out / "series.h5", "series", columns, table,
                    {{"regions", region_names}, {"region_column", "index into the regions attribute"},
                     {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2"}});
@@ -251,7 +244,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   }
   auto write_front = [&] {
     if (vy0 == 0.0) return;
-    ScopeTimer t(s.diagnostics_seconds);
+    Timed t(s.diagnostics_seconds);
     const auto& g = scene.geom;
     const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
     if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
@@ -266,7 +259,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     wall << "time_ns,wall_stress_GPa\n" << std::setprecision(10);
   }
   auto write_energy = [&] {
-    ScopeTimer t(s.diagnostics_seconds);
+    Timed t(s.diagnostics_seconds);
     const auto e = sim.energy();
     const auto q = sim.momentum();
     energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
@@ -304,7 +297,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       sim.step(t_end - sim.time());
       particle_steps += n;
       if (has_wall) {
-        ScopeTimer t(s.diagnostics_seconds);
+        Timed t(s.diagnostics_seconds);
         wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
       }
       if (sim.time() >= next_energy - eps) {

@@ -8,23 +8,12 @@
 #include <type_traits>
 
 #include "engine/diagnostics.hpp"
+#include "engine/timer.hpp"
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
 
 namespace smpm {
-
-namespace {
-
-// Scoped phase timer.
-struct Timed {
-  double& acc;
-  double t0 = omp_get_wtime();
-  explicit Timed(double& a) : acc(a) {}
-  ~Timed() { acc += omp_get_wtime() - t0; }
-};
-
-}  // namespace
 
 Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std::vector<Material> materials,
                        std::vector<int> body_material, Particles particles)
@@ -180,7 +169,6 @@ void Simulation::scatter_to_grid() {
 }
 
 void Simulation::update_grid() {
-  const double t0 = omp_get_wtime(), contact0 = times_.contact;
   const auto& g = grid_.geom;
   auto G = grid_.view();
   kern::GridUpdateParams q;
@@ -190,22 +178,26 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
-  WallForces w;
-  for (int f = 0; f < G.fields; ++f) {
-    kern::grid_update(g, G.field(f), q, row_force_.data());
-    for (int r = 0; r < g.sy(); ++r) {
-      const double* rf = &row_force_[kern::kRowSlots * r];
-      w.left += rf[0];
-      w.right += rf[1];
-      w.bottom += rf[2];
-      w.top += rf[3];
+  {
+    Timed t(times_.grid);
+    WallForces w;
+    for (int f = 0; f < G.fields; ++f) {
+      kern::grid_update(g, G.field(f), q, row_force_.data());
+      for (int r = 0; r < g.sy(); ++r) {
+        const double* rf = &row_force_[kern::kRowSlots * r];
+        w.left += rf[0];
+        w.right += rf[1];
+        w.bottom += rf[2];
+        w.top += rf[3];
+      }
     }
+    wall_ = w;
   }
-  wall_ = w;
   if (cfg_.contact) {
-    Timed c(times_.contact);
+    Timed t(times_.contact);
     kern::grid_contact(g, G, q, kern::ContactParams{cfg_.friction, cfg_.contact_volume_fraction});
   }
+  Timed t(times_.grid);
   for (int f = 0; f < G.fields; ++f) {
     const auto F = G.field(f);
     double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
@@ -215,7 +207,6 @@ void Simulation::update_grid() {
       kern::fill_periodic_ghosts(g, scatter, 3);
     }
   }
-  times_.grid += omp_get_wtime() - t0 - (times_.contact - contact0);
 }
 
 void Simulation::gather_from_grid() {

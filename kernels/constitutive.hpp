@@ -19,8 +19,7 @@
 #include "views.hpp"
 
 // Everything called per particle in the constitutive loop is forced inline: GCC 12 kept the
-// strength updates as calls otherwise, and a call in the loop body stops it running as SIMD
-// across particles.
+// strength updates as out-of-line calls otherwise (measured with perf on the loop).
 #define SMPM_INLINE [[gnu::always_inline]] inline
 
 namespace smpm::kern {
@@ -48,7 +47,7 @@ struct MieGruneisenEos {
     return {rho0, C, C * (2.0 * s - 1.0), C * (s - 1.0) * (3.0 * s - 1.0), gamma0};
   }
   double gamma_rho() const { return gamma0 * rho0; }
-  // Both branches are computed and one selected: the particle loop stays branch-free (SIMD).
+  // Both branches are computed and one selected: the particle loop stays branch-free.
   SMPM_INLINE double cold(double rho) const {
     const double mu = rho / rho0 - 1.0;
     // Gamma mu / 2 = gamma0 (1 - rho0 / rho) / 2
@@ -75,9 +74,8 @@ struct MieGruneisenEos {
 // (D_zz = 0, s_zz = -(s_xx + s_yy)); w = W_xy = (L_xy - L_yx) / 2. Written out in scalars: with
 // W = [0 w; -w 0], W s - s W = [2 w s_xy, w (s_yy - s_xx); same, -2 w s_xy], and the in-plane
 // part of dev(D) subtracts tr(D) / 3 from each diagonal entry. (tests/test_material.cpp checks
-// it against the 2x2 matrix expression in Eigen.) Scalars, not Eigen temporaries, because
-// this runs inside the SIMD particle loop: with Eigen 2x2 matrices GCC 12 kept stack temporaries
-// and the loop ran at 100 ns per particle instead of about 10.
+// it against the 2x2 matrix expression in Eigen.) Scalars, not Eigen temporaries: inside the
+// particle loop GCC 12 kept the Eigen 2x2 matrices as stack temporaries (docs/performance.md).
 SMPM_INLINE void jaumann_trial(double G, double& sxx, double& syy, double& sxy, double dxx, double dyy, double dxy,
                                double w, double dt) {
   const double third_tr = (dxx + dyy) / 3.0, spin = w * (syy - sxx), g2 = 2.0 * G;
@@ -128,8 +126,8 @@ struct VonMisesStrength {
     jaumann_trial(G, sxx, syy, sxy, dxx, dyy, dxy, w, dt);
     const double q = von_mises(sxx, syy, sxy);
     const double Y = Y0 + H * *epsp;
-    // branch-free (SIMD): an elastic step has deps = 0 and f = 1; the divisions are computed for
-    // every point (a division inside a conditional keeps GCC from if-converting the loop)
+    // branch-free: an elastic step has deps = 0 and f = 1; the divisions are computed for every
+    // point (a division inside a conditional keeps GCC from if-converting the loop)
     const bool flows = q > Y;
     const double deps_flow = (q - Y) / (3.0 * G + H);
     const double deps = flows ? deps_flow : 0.0;
@@ -197,8 +195,8 @@ ConstitutiveResult constitutive_update_impl(const ParticleView& P, const Constit
   const double dt = q.dt, l = q.av_length;
   // a fractured point's signal speed: the sound speed at rest (its stress is zero)
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
-  // every array through a local restrict pointer: loads of the view's members inside the loop
-  // (they might alias the stores) stop the vectorizer
+  // every array through a local restrict pointer: the view's members might alias the stores,
+  // so the compiler would reload them for every point
   const double* __restrict Lxxp = P.Lxx;
   const double* __restrict Lxyp = P.Lxy;
   const double* __restrict Lyxp = P.Lyx;
@@ -232,7 +230,7 @@ ConstitutiveResult constitutive_update_impl(const ParticleView& P, const Constit
     const double P0 = pp[p];
     double qv = 0.0, qspeed = 0.0;
     if constexpr (HasQ) {
-      const double c = std::sqrt(std::max(eos.bulk_modulus(rho, P0), 0.0) / rho);
+      const double c = std::sqrt(eos.bulk_modulus(rho, P0) / rho);
       const bool comp = trD < 0.0;
       qv = comp ? rho * l * (q.av_quadratic * l * trD * trD - q.av_linear * c * trD) : 0.0;
       qspeed = comp ? 2.0 * q.av_quadratic * l * -trD : 0.0;
@@ -263,10 +261,8 @@ ConstitutiveResult constitutive_update_impl(const ParticleView& P, const Constit
     // it stalled a 2 us porous run at dt = 7e-4 ns when the compaction front reached the free
     // top and it spalled.
     const bool fractured = Pn < q.p_min || rho < q.rho_min;
-    const double speed2 = vxp[p] * vxp[p] + vyp[p] * vyp[p];
-    const double c_long = std::sqrt(std::max(eos.bulk_modulus(rho, Pn) + 4.0 / 3.0 * str.shear_modulus(), 0.0) / rho);
-    const double vabs = std::sqrt(speed2);
-    const double sig = fractured ? c_fractured + vabs : c_long + vabs + qspeed;
+    const double vabs = std::sqrt(vxp[p] * vxp[p] + vyp[p] * vyp[p]);
+    const double sig = fractured ? c_fractured + vabs : signal_speed(eos, str, rho, Pn, vxp[p], vyp[p]) + qspeed;
     vmax = std::max(vmax, on ? sig : 0.0);
     // stores: unselected points keep their state
     Vp[p] = on ? V : V0;
