@@ -5,6 +5,8 @@
 #pragma once
 #include <cmath>
 
+#include "views.hpp"
+
 namespace smpm::kern {
 
 // apic_gradient: for the linear hat, B D^-1 = sum_i v_i grad w_i^T exactly (D = f (1 - f) h^2
@@ -16,7 +18,7 @@ struct Linear {
   static constexpr int N = 2;
   static constexpr bool apic_gradient = true;
   static constexpr const char* name = "linear";
-  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg);
     const double f = xg - b;
     w[0] = 1.0 - f;
@@ -51,8 +53,9 @@ struct UGIMP {
       dw = 0.0;
     }
   }
-  static inline int eval(double xg, double lp, double* w, double* dw) {
+  SMPM_INLINE static int eval(double xg, double lp, double* w, double* dw) {
     const int b = static_cast<int>(std::floor(xg - lp));
+#pragma GCC unroll 4
     for (int a = 0; a < N; ++a) {
       // d = xg - x_node; dN/dxg = dS/dd.
       one(xg - (b + a), lp, w[a], dw[a]);
@@ -66,7 +69,7 @@ struct QuadraticBSpline {
   static constexpr int N = 3;
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "quadratic";
-  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg - 0.5);
     const double f = xg - b;  // in [0.5, 1.5)
     const double a0 = 1.5 - f, a1 = f - 1.0, a2 = f - 0.5;
@@ -85,7 +88,7 @@ struct CubicBSpline {
   static constexpr int N = 4;
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "cubic";
-  static inline int eval(double xg, double /*lp*/, double* w, double* dw) {
+  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg) - 1.0;
     const double f = xg - b;  // in [1, 2)
     const double d1 = f - 1.0;  // in [0, 1)

@@ -254,7 +254,7 @@ struct G2PParams {
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
 // error is what remains. Needs m, px, py of the scatter still on the grid (ghosts filled).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
-inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
+SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
   constexpr int N = Shape::N;
   const double inv_h = 1.0 / g.h;
@@ -273,10 +273,14 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     ux = P.vx[p]; uy = P.vy[p];
     uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
   }
-  const std::size_t foff = Contact ? P.field(p) * G.fstride : 0;
+  // with Contact the view always carries body_field (Simulation::pview): the lookup without
+  // field()'s null test vectorizes
+  const std::size_t foff = Contact ? static_cast<std::size_t>(P.body_field[P.body[p]]) * G.fstride : 0;
+  #pragma GCC unroll 4
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b) + foff;
     const double dy = (by + b) - yg;
+    #pragma GCC unroll 4
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
       const double w = wx[a] * wy[b];
@@ -285,7 +289,7 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
       vy += w * gvy;
       if constexpr (Heat) {
         v2 += w * (gvx * gvx + gvy * gvy);
-        const double mi = G.m[n], inv = mi > 0.0 ? 1.0 / mi : 0.0;
+        const double mi = G.m[n], inv = mi > 0.0 ? 1.0 / mi : 0.0;  // if-converted (-fno-trapping-math)
         const double dx = (bx + a) - xg;
         const double rx = ux + uxx * dx + uxy * dy - G.px[n] * inv;
         const double ry = uy + uyx * dx + uyy * dy - G.py[n] * inv;
@@ -311,6 +315,7 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     // D = sum_i w_i (x_i - x_p)^2 per axis, grid units (diagonal for tensor-product shapes)
     double Dx = 0, Dy = 0;
     if constexpr (!Shape::apic_gradient || Heat) {
+      #pragma GCC unroll 4
       for (int a = 0; a < N; ++a) {
         const double ex = (bx + a) - xg, ey = (by + a) - yg;
         Dx += wx[a] * ex * ex;
@@ -340,12 +345,12 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
     }
   }
   if constexpr (What != G2PWhat::Velocity) {
+    // periodic x: wrap (the second test also catches x + L rounding up to x0 + L); selects,
+    // not branches, so the loop stays vectorizable (L = 0 leaves x as it is)
     double x = P.x[p] + q.dt * vx;
-    if (g.periodic_x) {
-      const double L = g.length_x();
-      if (x < g.x0) x += L;
-      if (x >= g.x0 + L) x -= L;  // also catches x + L rounding up to x0 + L
-    }
+    const double L = g.periodic_x ? g.length_x() : 0.0;
+    x = x < g.x0 ? x + L : x;
+    x = x >= g.x0 + L ? x - L : x;
     P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
     P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
     P.Lxx[p] = lxx * inv_h; P.Lxy[p] = lxy * inv_h;
@@ -355,10 +360,23 @@ inline void g2p_particle(const GridGeom& g, const GridView& G, const ParticleVie
 
 // Parallel gather over particles in array order: race-free by construction. Contact: particles
 // read their body's velocity field (a compile-time choice: the one-field path has no lookup).
+// Vectorized across particles (omp simd; grid values by gather instructions): the particle
+// body is inlined with its stencil loops unrolled and no branches, and the geometry, views and
+// parameters are copied into each thread's locals, which the particle stores cannot alias (read
+// through the references, GCC reloads them per point and rejects the loop). Each particle's sums
+// run in the same order in the vector body and the scalar remainder: results are bitwise the
+// same for any thread count (tests/test_kernels.cpp).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
-#pragma omp parallel for schedule(static)
-  for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact>(g, G, P, p, q);
+#pragma omp parallel
+  {
+    const GridGeom gl = g;
+    const GridView Gl = G;
+    const ParticleView Pl = P;
+    const G2PParams ql = q;
+#pragma omp for simd schedule(static)
+    for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact>(gl, Gl, Pl, p, ql);
+  }
 }
 
 }  // namespace smpm::kern
