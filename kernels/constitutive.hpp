@@ -184,9 +184,10 @@ struct ConstitutiveResult {
 // pragma (a max reduction over doubles is not vectorized without it, NaN semantics); the
 // parameters read into locals before the loop (a load under a condition through the params
 // reference is an unsupported masked load); bitwise | and & on the tests, not || and &&
-// (short-circuit masks did not convert). The vector body and the masked epilogue do the same
-// operations in the same order as the scalar code, so results do not depend on which one
-// processes a particle (tests/test_kernels.cpp: bitwise equal across thread counts).
+// (short-circuit masks did not convert). The vector body and the remainder do the same
+// operations in the same order, each rounded as written (-ffp-contract=off), so a result does
+// not depend on which one processes a particle: bitwise the same for any thread count
+// (tests/test_contact.cpp and tests/test_elastic.cpp, "determinism").
 template <bool Selective, bool HasE, bool HasQ, bool HasWp, class Eos, class Strength>
 ConstitutiveResult constitutive_update_impl(const ParticleView& P, const ConstitutiveState& S, std::size_t n,
                                             const ConstitutiveParams& q, const Eos& eos, const Strength& str,

@@ -364,8 +364,9 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
 // body is inlined with its stencil loops unrolled and no branches, and the geometry, views and
 // parameters are copied into each thread's locals, which the particle stores cannot alias (read
 // through the references, GCC reloads them per point and rejects the loop). Each particle's sums
-// run in the same order in the vector body and the scalar remainder: results are bitwise the
-// same for any thread count (tests/test_kernels.cpp).
+// run in the same order, each operation rounded as written (-ffp-contract=off), in the vector
+// body and the remainder: bitwise the same for any thread count (tests/test_contact.cpp,
+// tests/test_elastic.cpp, "determinism").
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
 #pragma omp parallel
