@@ -37,6 +37,7 @@ SCENES = {
     "porous_shock": ("grid.cell_size_um", {"1e5": 2.5, "1e6": 0.8, "4e6": 0.4}),
 }
 PHASES = ["sort", "p2g", "grid", "contact", "g2p", "constitutive", "heat", "diagnostics", "output"]
+STEP_PHASES = PHASES[:7]  # the time step itself
 
 # ---- the per-phase traffic and flop model ---------------------------------------------------
 # Bytes: compulsory DRAM traffic per particle-step, each array streamed once per phase: 8 B per
@@ -176,6 +177,21 @@ def tables(results, roof):
         lines.append(f"| {scene} | {r['particles']:,} | {r['steps']} | {v1:.2f} | {v2:.2f} | {v2 / v1:.2f} | "
                      f"{r['particle_bytes_per_particle']:.0f} | {r['resident_bytes'] / r['particles']:.0f} | "
                      f"{r['peak_rss_bytes'] / 2**20:.0f} | {do:.1f} |")
+    lines.append("")
+    lines.append("The step alone (the sum of the step's phase times: no diagnostics, no output):")
+    lines.append("")
+    lines.append("| scene | particles | ns/p-step, 1 thread | 2 threads | 2/1 | M particle-steps/s, 2 threads |")
+    lines.append("|---|---|---|---|---|---|")
+
+    def step_ns(r):
+        if r is None:
+            return float("nan")
+        return sum(t for ph, t in r["phase_seconds"].items() if ph in STEP_PHASES) / (r["particles"] * r["steps"]) * 1e9
+
+    for (scene, size) in sorted({(r["scene"], r["size"]) for r in results}, key=lambda k: (k[0], float(k[1]))):
+        r1, r2 = keyed.get((scene, size, 1)), keyed.get((scene, size, 2))
+        a, b = step_ns(r1), step_ns(r2)
+        lines.append(f"| {scene} | {(r2 or r1)['particles']:,} | {a:.1f} | {b:.1f} | {a / b:.2f} | {1e3 / b:.1f} |")
     lines.append("")
     lines.append("Per phase: ns per particle-step (measured), model bytes and flops per particle-step, and the "
                  "fraction of the roof reached (roof time / measured time).")
