@@ -178,6 +178,7 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
+  q.scatter_velocity = transfer_heat();  // the heating gather reads p / m
   {
     Timed t(times_.grid);
     WallForces w;
@@ -202,9 +203,9 @@ void Simulation::update_grid() {
     const auto F = G.field(f);
     double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
     kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
-    if (transfer_heat()) {  // the heating gather reads the scatter's momenta
-      double* scatter[] = {F.m, F.px, F.py};
-      kern::fill_periodic_ghosts(g, scatter, 3);
+    if (transfer_heat()) {  // the heating gather reads the scatter's velocity
+      double* scatter[] = {F.px, F.py};
+      kern::fill_periodic_ghosts(g, scatter, 2);
     }
   }
 }

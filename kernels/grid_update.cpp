@@ -68,10 +68,15 @@ void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q
       if (m <= 0.0) {
         G.vx[n] = G.vy[n] = 0.0;
         if (q.flip) G.dvx[n] = G.dvy[n] = 0.0;
+        if (q.scatter_velocity) G.px[n] = G.py[n] = 0.0;
         continue;
       }
       const double inv_m = 1.0 / m;
       double ux = G.px[n] * inv_m, uy = G.py[n] * inv_m;  // old velocity
+      if (q.scatter_velocity) {
+        G.px[n] = ux;
+        G.py[n] = uy;
+      }
       const double acc = m > q.mass_eps ? q.dt : 0.0;
       double vx = ux + acc * (G.fx[n] * inv_m + q.gravity_x);
       double vy = uy + acc * (G.fy[n] * inv_m + q.gravity_y);

@@ -23,6 +23,9 @@ struct GridUpdateParams {
   double mass_eps = 0.0;
   Walls walls;
   bool flip = false;      // also store dv = v_new - v_old
+  // Replace the momenta px, py by the scatter's velocity p / m (0 on empty nodes): the APIC
+  // heating gather reads it (kernels/transfer.hpp), and reads one array less, with no division.
+  bool scatter_velocity = false;
 };
 
 // Reaction of each wall on the material, summed per storage row so that the total is

@@ -252,7 +252,8 @@ struct G2PParams {
 //   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
 // both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
-// error is what remains. Needs m, px, py of the scatter still on the grid (ghosts filled).
+// error is what remains. Needs the scatter's velocity p / m in px, py (the grid update's
+// scatter_velocity, ghosts filled).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
@@ -289,10 +290,9 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       vy += w * gvy;
       if constexpr (Heat) {
         v2 += w * (gvx * gvx + gvy * gvy);
-        const double mi = G.m[n], inv = mi > 0.0 ? 1.0 / mi : 0.0;  // if-converted (-fno-trapping-math)
-        const double dx = (bx + a) - xg;
-        const double rx = ux + uxx * dx + uxy * dy - G.px[n] * inv;
-        const double ry = uy + uyx * dx + uyy * dy - G.py[n] * inv;
+        const double dx = (bx + a) - xg;  // px, py hold the scatter's velocity p / m here
+        const double rx = ux + uxx * dx + uxy * dy - G.px[n];
+        const double ry = uy + uyx * dx + uyy * dy - G.py[n];
         r2 += w * (rx * rx + ry * ry);
       }
       if constexpr (FLIP && What != G2PWhat::PositionGradient) {
