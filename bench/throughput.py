@@ -84,20 +84,23 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
         per_node = 1 + (8 if apic else 0) + 4 + 2 + 4 + 8 + 2  # w, affine, momentum, mass, grad, force
         return b, ev + 30 + nodes * per_node
     if phase == "grid":
-        # read m, px, py, fx, fy; write vx, vy (and dvx, dvy for FLIP), write-allocate
-        return npp * (5 * 8 + (4 if flip else 2) * 16), npp * 14
+        # read m, px, py, fx, fy; write vx, vy (and dvx, dvy for FLIP), write-allocate; with
+        # transfer heating also px, py back (the scatter velocity p / m, in place)
+        heat_g = apic and "e" in has
+        return npp * (5 * 8 + (4 if flip else 2) * 16 + (16 if heat_g else 0)), npp * 14
     if phase == "contact":
         return npp * 2 * (8 * 8 + 4 * 16), npp * 60
     if phase == "g2p":
-        # reads x, y; writes x, y, v, L, C; heat: reads v, C, e too, and m, px, py of the grid
+        # reads x, y; writes x, y, v, L, C; heat: reads v, C, e too, and the scatter velocity
+        # (px, py hold p / m after the grid update)
         b = 2 * 16 + 2 * (8 if (heat or flip) else 16) + 8 * 2 * 4  # x y rw, v, L (write-allocate)
         b += rw("Cxx", "Cxy", "Cyx", "Cyy") if heat else 16 * 4 * apic
         if heat:
             b += rw("e")
-        b += npp * 8 * (2 + (3 if heat else 0) + (2 if flip else 0))
+        b += npp * 8 * (2 + (2 if heat else 0) + (2 if flip else 0))
         per_node = 1 + 4 + 8 + (8 if (apic and cfg["shape"] == "linear") else 0)
         if heat:
-            per_node += 18
+            per_node += 16
         if flip:
             per_node += 4
         flops = ev + 40 + nodes * per_node
