@@ -277,11 +277,11 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   // with Contact the view always carries body_field (Simulation::pview): the lookup without
   // field()'s null test vectorizes
   const std::size_t foff = Contact ? static_cast<std::size_t>(P.body_field[P.body[p]]) * G.fstride : 0;
-  #pragma GCC unroll 4
+#pragma GCC unroll 4
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b) + foff;
     const double dy = (by + b) - yg;
-    #pragma GCC unroll 4
+#pragma GCC unroll 4
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
       const double w = wx[a] * wy[b];
@@ -315,7 +315,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     // D = sum_i w_i (x_i - x_p)^2 per axis, grid units (diagonal for tensor-product shapes)
     double Dx = 0, Dy = 0;
     if constexpr (!Shape::apic_gradient || Heat) {
-      #pragma GCC unroll 4
+#pragma GCC unroll 4
       for (int a = 0; a < N; ++a) {
         const double ex = (bx + a) - xg, ey = (by + a) - yg;
         Dx += wx[a] * ex * ex;
