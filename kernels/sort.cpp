@@ -9,9 +9,21 @@ namespace smpm::kern {
 std::ptrdiff_t compute_keys(const GridGeom& g, const double* x, const double* y, std::size_t n,
                             std::uint32_t* key) {
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel for schedule(static) reduction(min : bad)
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!cell_key(g, x[i], y[i], key[i])) bad = std::min(bad, static_cast<std::ptrdiff_t>(i));
+#pragma omp parallel
+  {
+    // thread-local geometry and restrict pointers (through the shared ones GCC reloads them
+    // per point)
+    const KeyGeom gl(g);
+    const double* __restrict xl = x;
+    const double* __restrict yl = y;
+    std::uint32_t* __restrict kl = key;
+#pragma omp for simd schedule(static) reduction(min : bad)
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint32_t k;
+      const bool inside = cell_key(gl, xl[i], yl[i], k);
+      kl[i] = k;
+      bad = std::min(bad, inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
+    }
   }
   return bad == static_cast<std::ptrdiff_t>(n) ? -1 : bad;
 }

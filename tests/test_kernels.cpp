@@ -107,12 +107,46 @@ TEST_CASE("sort: every particle exactly once, cells in order, stable, thread-cou
   for (std::size_t k = 0; k < g.num_keys(); ++k)
     for (std::uint32_t s = b1.start[k]; s < b1.start[k + 1]; ++s) REQUIRE(b1.key[b1.order[s]] == k);
   REQUIRE(b1.start[g.num_keys()] == P.size());
-  // the key maps back to the cell holding the particle
+  // the key maps back to the cell holding the particle (grid units as the transfers compute them)
   for (std::size_t i = 0; i < P.size(); i += 97) {
-    const int cx = static_cast<int>((P.x[i] - g.x0) / g.h), cy = static_cast<int>((P.y[i] - g.y0) / g.h);
+    const double inv_h = 1.0 / g.h;
+    const int cx = static_cast<int>((P.x[i] - g.x0) * inv_h), cy = static_cast<int>((P.y[i] - g.y0) * inv_h);
     const int t = b1.key[i] / g.cells_per_tile(), l = b1.key[i] % g.cells_per_tile();
     REQUIRE((t % g.tiles_x()) * g.tile + l % g.tile == cx);
     REQUIRE((t / g.tiles_x()) * g.tile + l / g.tile == cy);
+  }
+}
+
+// The key's cell must be the transfers' cell, floor((x - x0) * (1 / h)), also for points on a cell
+// edge and one ulp either side of it, and for tile widths that are not powers of two (the key
+// divides by the tile width in doubles, with a correction).
+TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any tile width", "[sort]") {
+  for (int tile : {4, 5, 7, 8, 16}) {
+    GridGeom g = make_geom(false);
+    g.tile = tile;
+    g.h = 0.1;  // 1 / 0.1 is inexact: (x - x0) * inv_h and (x - x0) / h differ on some edges
+    const double inv_h = 1.0 / g.h;
+    std::vector<double> x, y;
+    for (int i = 0; i < g.nx; ++i) {
+      const double e = g.x0 + i * g.h;
+      for (double xi : {std::nextafter(e, -1e9), e, std::nextafter(e, 1e9), e + 0.5 * g.h}) {
+        x.push_back(xi);
+        y.push_back(g.y0 + (i % g.ny) * g.h);  // on a row edge too
+      }
+    }
+    std::vector<std::uint32_t> key(x.size());
+    const std::ptrdiff_t first = compute_keys(g, x.data(), y.data(), x.size(), key.data());
+    // only the point just below x0 is outside
+    REQUIRE(first == 0);
+    for (std::size_t i = 1; i < x.size(); ++i) {
+      const int cx = static_cast<int>(std::floor((x[i] - g.x0) * inv_h));
+      const int cy = static_cast<int>(std::floor((y[i] - g.y0) * inv_h));
+      const int tx = cx / tile, ty = cy / tile;
+      const auto expect = static_cast<std::uint32_t>((ty * g.tiles_x() + tx) * g.cells_per_tile() +
+                                                     (cy - ty * tile) * tile + (cx - tx * tile));
+      INFO("tile " << tile << ", point " << i << ", x = " << x[i] << ", cell " << cx << ", " << cy);
+      REQUIRE(key[i] == expect);
+    }
   }
 }
 
