@@ -16,7 +16,11 @@
 // count: independent, L1-resident, compute-only work (a chain of square roots and divisions per
 // element, static schedule), the most a loop can gain from more threads on this machine at that
 // moment. Its ratio is printed as "machine", and each phase's ratio divided by it as
-// "of machine": a vCPU of a shared host does not always deliver a whole core.
+// "of machine": a vCPU of a shared host does not always deliver a whole core. A second
+// reference, a STREAM triad over 3 x 32 MiB (far beyond the L3), gives the memory system's own
+// 2/1 in the same rounds ("memory"): what a memory-bound phase can gain at that moment. On this
+// VM it has ranged from 1.1 to 1.9 between sessions (bench/throughput.py's triad), and a
+// neighbour's traffic can lower it without touching the compute reference.
 #include <omp.h>
 
 #include <algorithm>
@@ -62,6 +66,29 @@ double reference_work(long n) {
   }
   return s;
 }
+
+// The memory reference: a[i] = b[i] + 3 c[i] over 3 arrays of 32 MiB, static schedule (the
+// arrays are first touched with the same schedule).
+struct Triad {
+  static constexpr long kN = 4L << 20;
+  std::vector<double> a, b, c;
+  Triad() : a(kN), b(kN), c(kN) {
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < kN; ++i) {
+      a[i] = 0.0;
+      b[i] = 1.0;
+      c[i] = 2.0;
+    }
+  }
+  double run() {
+    double* __restrict x = a.data();
+    const double* __restrict y = b.data();
+    const double* __restrict z = c.data();
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < kN; ++i) x[i] = y[i] + 3.0 * z[i];
+    return x[kN / 2];
+  }
+};
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
@@ -121,7 +148,8 @@ int main(int argc, char** argv) {
     const std::size_t T = threads.size();
     // per thread count, per phase: seconds of each round
     std::vector<std::array<std::vector<double>, kPhases>> sec(T);
-    std::vector<std::vector<double>> ref_sec(T);
+    std::vector<std::vector<double>> ref_sec(T), mem_sec(T);
+    Triad triad;
     constexpr long kRefWork = 400000;  // about 6 ms with one thread (the loop is vectorized)
     volatile double sink = 0.0;
     for (long r = 0; r < rounds; ++r) {
@@ -135,6 +163,9 @@ int main(int argc, char** argv) {
         const double t0 = omp_get_wtime();
         sink = sink + reference_work(kRefWork);
         ref_sec[u].push_back(omp_get_wtime() - t0);
+        const double t1 = omp_get_wtime();
+        sink = sink + triad.run();
+        mem_sec[u].push_back(omp_get_wtime() - t1);
       }
     }
     const double ps = n * static_cast<double>(per_round);
@@ -166,13 +197,17 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
     }
-    std::printf("%-13s", "machine");
-    for (std::size_t k = 0; k < T; ++k) std::printf("  %13.1f ms", median(ref_sec[k]) * 1e3);
-    for (std::size_t k = 1; k < T; ++k) {
-      const Spread r = ratio(ref_sec[0], ref_sec[k]);
-      std::printf("  %8.3f (%.2f-%.2f)", r.median, r.lo, r.hi);
-    }
-    std::printf("   (reference kernel: compute-only, same thread counts, same rounds)\n");
+    auto reference_row = [&](const char* name, const std::vector<std::vector<double>>& t, const char* what) {
+      std::printf("%-13s", name);
+      for (std::size_t k = 0; k < T; ++k) std::printf("  %13.1f ms", median(t[k]) * 1e3);
+      for (std::size_t k = 1; k < T; ++k) {
+        const Spread r = ratio(t[0], t[k]);
+        std::printf("  %8.3f (%.2f-%.2f)", r.median, r.lo, r.hi);
+      }
+      std::printf("   (%s)\n", what);
+    };
+    reference_row("machine", ref_sec, "reference kernel: compute-only, same thread counts, same rounds");
+    reference_row("memory", mem_sec, "STREAM triad over 96 MiB, same thread counts, same rounds");
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
