@@ -114,7 +114,8 @@ bool sort_particles(const kern::GridGeom& g, Particles& P) {
   kern::counting_sort(key.data(), n, g.num_keys(), hist.data(), cell_start.data(), order.data());
   std::vector<double> sd;
   std::vector<std::uint32_t> su;
-  P.permute(order.data(), sd, su);
+  std::vector<std::uint8_t> sb;
+  P.permute(order.data(), sd, su, sb);
   return true;
 }
 

@@ -45,19 +45,20 @@ kern::ParticleView Particles::view() {
           p.data(), Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data(), d(Cxx), d(Cxy), d(Cyx), d(Cyy), d(q), d(e)};
 }
 
-void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su) {
+void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su,
+                        std::vector<std::uint8_t>& sb) {
   const std::size_t n = size();
   sd.resize(n);
   su.resize(n);
+  sb.resize(n);
   for_each_double(*this, [&](std::vector<double>& v) {
     kern::gather_permute(v.data(), order, n, sd.data());
     v.swap(sd);
   });
   kern::gather_permute(id.data(), order, n, su.data());
   id.swap(su);
-  std::vector<std::uint8_t> b(n);
-  kern::gather_permute(body.data(), order, n, b.data());
-  body.swap(b);
+  kern::gather_permute(body.data(), order, n, sb.data());
+  body.swap(sb);
 }
 
 std::size_t Particles::bytes() const {

@@ -34,9 +34,10 @@ struct Particles {
   // allocate (zeroed) or release one optional scalar field
   static void enable(std::vector<double>& field, std::size_t n, bool on);
   kern::ParticleView view();
-  // Physically reorders every array so that array order becomes `order` (sorted order).
+  // Physically reorders every array so that array order becomes `order` (sorted order). The
+  // scratch vectors are resized to size() once and then reused: no allocation per permutation.
   void permute(const std::uint32_t* order, std::vector<double>& scratch_d,
-               std::vector<std::uint32_t>& scratch_u);
+               std::vector<std::uint32_t>& scratch_u, std::vector<std::uint8_t>& scratch_b);
   // Resident bytes of all particle arrays.
   std::size_t bytes() const;
   // Names of the arrays in use (the optional ones only when allocated), as in this struct.

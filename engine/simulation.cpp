@@ -134,7 +134,7 @@ void Simulation::bin_particles() {
   }
   kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
   if (cfg_.permute_every > 0 && steps_ % cfg_.permute_every == 0) {
-    P_.permute(order_.data(), scratch_d_, scratch_u_);
+    P_.permute(order_.data(), scratch_d_, scratch_u_, scratch_b_);
     kern::gather_permute(key_.data(), order_.data(), n, scratch_u_.data());
     key_.swap(scratch_u_);
     for (std::size_t s = 0; s < n; ++s) order_[s] = static_cast<std::uint32_t>(s);
@@ -377,7 +377,7 @@ std::size_t Simulation::bytes() const {
   return P_.bytes() + grid_.bytes() +
          (key_.capacity() + order_.capacity() + cell_start_.capacity() + hist_.capacity() + scratch_u_.capacity()) *
              sizeof(std::uint32_t) +
-         scratch_d_.capacity() * sizeof(double);
+         scratch_d_.capacity() * sizeof(double) + scratch_b_.capacity();
 }
 
 }  // namespace smpm

@@ -125,6 +125,7 @@ class Simulation {
   std::vector<std::uint32_t> key_, order_, cell_start_, hist_;
   std::vector<double> scratch_d_;
   std::vector<std::uint32_t> scratch_u_;
+  std::vector<std::uint8_t> scratch_b_;
   std::vector<double> row_force_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
   std::array<std::uint8_t, 256> body_field_{};          // contact: velocity field of each body
