@@ -208,9 +208,9 @@ template <class S>
 void prepare_grid(KernelState& s) {
   auto G = s.grid.view();
   auto pv = s.P.view();
-  kern::clear_grid(s.g, G, true);
+  kern::clear_grid(s.g, s.g.all_nodes(), G, true);
   kern::p2g_colored<S, true, kern::P2GWhat::All>(s.g, G, pv, s.order.data(), s.cell_start.data(), kLp);
-  kern::grid_update(s.g, G, grid_params(), s.row_force.data());
+  kern::grid_update(s.g, s.g.all_nodes(), G, grid_params(), s.row_force.data());
 }
 
 void set_rate(benchmark::State& state, std::size_t n) {
@@ -255,7 +255,7 @@ void BM_P2G(benchmark::State& state) {
   auto G = s->grid.view();
   auto pv = s->P.view();
   for (auto _ : state) {
-    kern::clear_grid(g, G, true);
+    kern::clear_grid(g, g.all_nodes(), G, true);
     if constexpr (Mode == P2GMode::Colored)
       kern::p2g_colored<S, true, kern::P2GWhat::All>(g, G, pv, s->order.data(), s->cell_start.data(), kLp);
     else if constexpr (Mode == P2GMode::Atomic)
@@ -278,8 +278,8 @@ void BM_GridUpdate(benchmark::State& state) {
   const auto q = grid_params();
   double* arrays[] = {G.vx, G.vy};
   for (auto _ : state) {
-    kern::grid_update(g, G, q, s->row_force.data());
-    kern::fill_periodic_ghosts(g, arrays, 2);
+    kern::grid_update(g, g.all_nodes(), G, q, s->row_force.data());
+    kern::fill_periodic_ghosts(g, g.all_nodes(), arrays, 2);
     benchmark::ClobberMemory();
   }
   set_rate(state, n);

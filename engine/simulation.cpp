@@ -133,6 +133,7 @@ void Simulation::bin_particles() {
                     "] m: enlarge the grid or add a wall");
   }
   kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
+  box_ = kern::occupied_nodes(g, cell_start_.data());  // the grid passes of this step stay inside
   if (cfg_.permute_every > 0 && steps_ % cfg_.permute_every == 0) {
     P_.permute(order_.data(), scratch_d_, scratch_u_, scratch_b_);
     kern::gather_permute(key_.data(), order_.data(), n, scratch_u_.data());
@@ -146,7 +147,7 @@ void Simulation::scatter_to_grid() {
   const auto& g = grid_.geom;
   auto G = grid_.view();
   const auto pv = pview();
-  kern::clear_grid(g, G, true);
+  kern::clear_grid(g, box_, G, true);
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
     using kern::P2GWhat;
@@ -164,7 +165,7 @@ void Simulation::scatter_to_grid() {
   for (int f = 0; f < G.fields; ++f) {
     const auto F = G.field(f);
     double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.gmx, F.gmy, F.vol};
-    kern::fold_periodic(g, arrays, cfg_.contact ? 8 : 5);
+    kern::fold_periodic(g, box_, arrays, cfg_.contact ? 8 : 5);
   }
 }
 
@@ -183,7 +184,7 @@ void Simulation::update_grid() {
     Timed t(times_.grid);
     WallForces w;
     for (int f = 0; f < G.fields; ++f) {
-      kern::grid_update(g, G.field(f), q, row_force_.data());
+      kern::grid_update(g, box_, G.field(f), q, row_force_.data());
       for (int r = 0; r < g.sy(); ++r) {
         const double* rf = &row_force_[kern::kRowSlots * r];
         w.left += rf[0];
@@ -196,16 +197,16 @@ void Simulation::update_grid() {
   }
   if (cfg_.contact) {
     Timed t(times_.contact);
-    kern::grid_contact(g, G, q, kern::ContactParams{cfg_.friction, cfg_.contact_volume_fraction});
+    kern::grid_contact(g, box_, G, q, kern::ContactParams{cfg_.friction, cfg_.contact_volume_fraction});
   }
   Timed t(times_.grid);
   for (int f = 0; f < G.fields; ++f) {
     const auto F = G.field(f);
     double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
-    kern::fill_periodic_ghosts(g, arrays, q.flip ? 4 : 2);
+    kern::fill_periodic_ghosts(g, box_, arrays, q.flip ? 4 : 2);
     if (transfer_heat()) {  // the heating gather reads the scatter's velocity
       double* scatter[] = {F.px, F.py};
-      kern::fill_periodic_ghosts(g, scatter, 2);
+      kern::fill_periodic_ghosts(g, box_, scatter, 2);
     }
   }
 }
@@ -244,18 +245,18 @@ void Simulation::gather_from_grid() {
     if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
     else if (heat) kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);
     else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
-    kern::clear_grid(g, G, false);
+    kern::clear_grid(g, box_, G, false);
     if (cfg_.transfer == Transfer::APIC)
       kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
     else
       kern::p2g_colored<S, false, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
     double* mom[] = {G.px, G.py};
-    kern::fold_periodic(g, mom, 2);
+    kern::fold_periodic(g, box_, mom, 2);
     kern::GridUpdateParams gq;
     gq.walls = cfg_.walls;
-    kern::grid_velocity_from_momentum(g, G, gq);
+    kern::grid_velocity_from_momentum(g, box_, G, gq);
     double* vel[] = {G.vx, G.vy};
-    kern::fill_periodic_ghosts(g, vel, 2);
+    kern::fill_periodic_ghosts(g, box_, vel, 2);
     kern::g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, n, q);
   });
 }
@@ -311,7 +312,7 @@ void Simulation::conduct_heat() {
     using S = decltype(shape);
     kern::heat_scatter<S>(g, H, hp, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
     double* arrays[] = {H.cap, H.capT};
-    kern::fold_periodic(g, arrays, 2);
+    kern::fold_periodic(g, g.all_nodes(), arrays, 2);
     kern::heat_conduct(g, H, conductivity_, heat_cmin_, dt_);
     kern::heat_gather<S>(g, H, hp, n, cfg_.ugimp_lp, std::min(1.0, heat_relax_rate_ * dt_));
   });

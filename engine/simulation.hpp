@@ -123,6 +123,7 @@ class Simulation {
   Grid grid_;
   // binning
   std::vector<std::uint32_t> key_, order_, cell_start_, hist_;
+  kern::NodeBox box_;  // the nodes this step's particles reach: every grid pass stays inside
   std::vector<double> scratch_d_;
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;

@@ -7,15 +7,10 @@ namespace smpm::kern {
 
 namespace {
 
-// Column range of nodes that carry state: periodic x keeps 0..nx-1 (ghosts are copies).
-inline void real_columns(const GridGeom& g, int& i0, int& i1) {
-  if (g.periodic_x) {
-    i0 = 0;
-    i1 = g.nx - 1;
-  } else {
-    i0 = -g.pad;
-    i1 = g.nx + g.pad;
-  }
+// Column range of the box's nodes that carry state: periodic x keeps 0..nx-1 (ghosts are copies).
+inline void real_columns(const GridGeom& g, const NodeBox& b, int& i0, int& i1) {
+  i0 = std::max(b.i0, g.periodic_x ? 0 : -g.pad);
+  i1 = std::min(b.i1, g.periodic_x ? g.nx - 1 : g.nx + g.pad);
 }
 
 inline void apply_wall(Wall w, double& vn, double& vt) {
@@ -53,14 +48,15 @@ inline void constrain(const GridGeom& g, const Walls& W, int i, int j, double& v
 
 }  // namespace
 
-void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q, double* row_force) {
+void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
+                 double* row_force) {
   int i0, i1;
-  real_columns(g, i0, i1);
-  const int sy = g.sy();
+  real_columns(g, b, i0, i1);
   const double inv_dt = q.dt > 0.0 ? 1.0 / q.dt : 0.0;
+  if (row_force) std::fill(row_force, row_force + kRowSlots * static_cast<std::size_t>(g.sy()), 0.0);
 #pragma omp parallel for schedule(static)
-  for (int r = 0; r < sy; ++r) {
-    const int j = r - g.pad;
+  for (int j = b.j0; j <= b.j1; ++j) {
+    const int r = j + g.pad;
     double rf[kRowSlots] = {0, 0, 0, 0};
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
@@ -97,13 +93,11 @@ void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q
   }
 }
 
-void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const GridUpdateParams& q) {
+void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q) {
   int i0, i1;
-  real_columns(g, i0, i1);
-  const int sy = g.sy();
+  real_columns(g, b, i0, i1);
 #pragma omp parallel for schedule(static)
-  for (int r = 0; r < sy; ++r) {
-    const int j = r - g.pad;
+  for (int j = b.j0; j <= b.j1; ++j) {
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
       const double m = G.m[n];
@@ -120,30 +114,32 @@ void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const Gri
   }
 }
 
-void clear_grid(const GridGeom& g, const GridView& G, bool all) {
-  const std::size_t nn = g.num_nodes() * static_cast<std::size_t>(G.fields);
-#pragma omp parallel for schedule(static)
-  for (std::size_t n = 0; n < nn; ++n) {
-    G.px[n] = 0.0;
-    G.py[n] = 0.0;
-    if (all) {
-      G.m[n] = 0.0;
-      G.fx[n] = 0.0;
-      G.fy[n] = 0.0;
-      if (G.gmx) G.gmx[n] = G.gmy[n] = G.vol[n] = 0.0;
+void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all) {
+#pragma omp parallel for schedule(static) collapse(2)
+  for (int f = 0; f < G.fields; ++f)
+    for (int j = b.j0; j <= b.j1; ++j) {
+      const std::size_t n0 = g.node(b.i0, j) + f * G.fstride, n1 = n0 + (b.i1 - b.i0 + 1);
+      for (std::size_t n = n0; n < n1; ++n) {
+        G.px[n] = 0.0;
+        G.py[n] = 0.0;
+        if (all) {
+          G.m[n] = 0.0;
+          G.fx[n] = 0.0;
+          G.fy[n] = 0.0;
+          if (G.gmx) G.gmx[n] = G.gmy[n] = G.vol[n] = 0.0;
+        }
+      }
     }
-  }
 }
 
-void grid_contact(const GridGeom& g, const GridView& G, const GridUpdateParams& q, const ContactParams& c) {
+void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
+                  const ContactParams& c) {
   int i0, i1;
-  real_columns(g, i0, i1);
-  const int sy = g.sy();
+  real_columns(g, box, i0, i1);
   const std::size_t fs = G.fstride;
   const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
 #pragma omp parallel for schedule(static)
-  for (int r = 0; r < sy; ++r) {
-    const int j = r - g.pad;
+  for (int j = box.j0; j <= box.j1; ++j) {
     for (int i = i0; i <= i1; ++i) {
       const std::size_t a = g.node(i, j), b = a + fs;
       const double m0 = G.m[a], m1 = G.m[b];
@@ -187,12 +183,10 @@ void grid_contact(const GridGeom& g, const GridView& G, const GridUpdateParams& 
   }
 }
 
-void fold_periodic(const GridGeom& g, double* const* arrays, int count) {
+void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count) {
   if (!g.periodic_x) return;
-  const int sy = g.sy();
 #pragma omp parallel for schedule(static)
-  for (int r = 0; r < sy; ++r) {
-    const int j = r - g.pad;
+  for (int j = b.j0; j <= b.j1; ++j) {
     for (int k = 0; k < count; ++k) {
       double* a = arrays[k];
       for (int i = -g.pad; i < 0; ++i) {
@@ -207,12 +201,10 @@ void fold_periodic(const GridGeom& g, double* const* arrays, int count) {
   }
 }
 
-void fill_periodic_ghosts(const GridGeom& g, double* const* arrays, int count) {
+void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* arrays, int count) {
   if (!g.periodic_x) return;
-  const int sy = g.sy();
 #pragma omp parallel for schedule(static)
-  for (int r = 0; r < sy; ++r) {
-    const int j = r - g.pad;
+  for (int j = b.j0; j <= b.j1; ++j) {
     for (int k = 0; k < count; ++k) {
       double* a = arrays[k];
       for (int i = -g.pad; i < 0; ++i) a[g.node(i, j)] = a[g.node(i + g.nx, j)];

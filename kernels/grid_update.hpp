@@ -28,11 +28,16 @@ struct GridUpdateParams {
   bool scatter_velocity = false;
 };
 
+// Every grid pass works on the nodes of a box b (the step's occupied_nodes, or
+// g.all_nodes()); nodes outside it are neither read nor written.
+
 // Reaction of each wall on the material, summed per storage row so that the total is
 // formed in a fixed order (deterministic for any thread count). row_force has kRowSlots * sy()
-// entries per call: [left x, right x, bottom y, top y] per row; the caller sums them.
+// entries per call: [left x, right x, bottom y, top y] per row (0 outside the box); the caller
+// sums them.
 inline constexpr int kRowSlots = 4;
-void grid_update(const GridGeom& g, const GridView& G, const GridUpdateParams& q, double* row_force);
+void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
+                 double* row_force);
 
 // Multi-body contact between two velocity fields (Bardenhagen et al. 2001). After each field's
 // own update (grid_update on G.field(f)), at every node where both fields carry mass and
@@ -52,17 +57,18 @@ struct ContactParams {
   // at 0.9 and was kicked up; at 1 nothing (docs/verification.md).
   double volume_fraction = 1.0;
 };
-void grid_contact(const GridGeom& g, const GridView& G, const GridUpdateParams& q, const ContactParams& c);
+void grid_contact(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
+                  const ContactParams& c);
 
 // MUSL remap: velocity = momentum / mass, walls applied, no forces.
-void grid_velocity_from_momentum(const GridGeom& g, const GridView& G, const GridUpdateParams& q);
+void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q);
 
 // Zero the arrays a P2G writes (mass and forces only when `all`), every field.
-void clear_grid(const GridGeom& g, const GridView& G, bool all);
+void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all);
 
 // Periodic x: add ghost-column sums onto their real columns (after P2G), and copy real
 // columns into ghost columns (after the grid update) for the arrays named.
-void fold_periodic(const GridGeom& g, double* const* arrays, int count);
-void fill_periodic_ghosts(const GridGeom& g, double* const* arrays, int count);
+void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
+void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
 
 }  // namespace smpm::kern

@@ -50,7 +50,7 @@ void heat_conduct(const GridGeom& g, const HeatGrid& H, double k, double c_min, 
     }
   if (g.periodic_x) {
     double* a[] = {H.dT};  // (T's ghosts were filled above)
-    fill_periodic_ghosts(g, a, 1);
+    fill_periodic_ghosts(g, g.all_nodes(), a, 1);
   }
 }
 

@@ -184,6 +184,32 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
   }
 }
 
+// The nodes the particles binned in cell_start reach: the union of the node blocks of the
+// occupied tiles (tile_span), which holds every node a colored scatter writes and every node a
+// gather reads. With periodic x it spans all columns (the fold and the ghost fill need them).
+// Empty without particles.
+inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start) {
+  const int TX = g.tiles_x(), NT = g.num_tiles();
+  const std::size_t cpt = static_cast<std::size_t>(g.cells_per_tile());
+  int tx0 = TX, tx1 = -1, ty0 = g.tiles_y(), ty1 = -1;
+#pragma omp parallel for schedule(static) reduction(min : tx0, ty0) reduction(max : tx1, ty1)
+  for (int t = 0; t < NT; ++t) {
+    if (cell_start[t * cpt] == cell_start[(t + 1) * cpt]) continue;
+    tx0 = std::min(tx0, t % TX);
+    tx1 = std::max(tx1, t % TX);
+    ty0 = std::min(ty0, t / TX);
+    ty1 = std::max(ty1, t / TX);
+  }
+  if (tx1 < 0) return NodeBox{};
+  const int last = tile_span(g.tile) - 1;  // a tile block's nodes: [t tile - 1, t tile - 1 + last]
+  NodeBox b;
+  b.i0 = g.periodic_x ? -g.pad : tx0 * g.tile - 1;
+  b.i1 = g.periodic_x ? g.nx + g.pad : std::min(tx1 * g.tile - 1 + last, g.nx + g.pad);
+  b.j0 = ty0 * g.tile - 1;
+  b.j1 = std::min(ty1 * g.tile - 1 + last, g.ny + g.pad);
+  return b;
+}
+
 // Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
 // two velocity fields, with mass gradients and volumes.
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false>

@@ -37,7 +37,19 @@ struct GridGeom {
   std::size_t num_keys() const { return static_cast<std::size_t>(num_tiles()) * cells_per_tile(); }
   double length_x() const { return nx * h; }
   double length_y() const { return ny * h; }
+  struct NodeBox all_nodes() const;
 };
+
+// A rectangle of nodes, i in [i0, i1], j in [j0, j1] (inclusive; ghosts included, so
+// -pad <= i0 and i1 <= nx + pad, the same for j). The grid passes of a step work on the box its
+// particles occupy (occupied_nodes, kernels/transfer.hpp): a scene that fills a third of its grid
+// (the elastic block) pays for a third of the grid traffic. Empty when i1 < i0 or j1 < j0.
+struct NodeBox {
+  int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+  bool empty() const { return i1 < i0 || j1 < j0; }
+  int rows() const { return empty() ? 0 : j1 - j0 + 1; }
+};
+inline NodeBox GridGeom::all_nodes() const { return NodeBox{-pad, nx + pad, -pad, ny + pad}; }
 
 // With multi-body contact every array holds one block of num_nodes() values per velocity field
 // (field f of node n at n + f * fstride); fstride is 0 with a single field.

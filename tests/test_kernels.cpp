@@ -198,10 +198,10 @@ void check_conservation(bool periodic) {
   auto G = grid.view();
   auto pv = P.view();
   Bins b = bin(g, P);
-  clear_grid(g, G, true);
+  clear_grid(g, g.all_nodes(), G, true);
   p2g_colored<S, true, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
   double* arrays[] = {G.m, G.px, G.py, G.fx, G.fy};
-  fold_periodic(g, arrays, 5);
+  fold_periodic(g, g.all_nodes(), arrays, 5);
 
   // particle totals; APIC angular momentum x_p x m v_p + m (C_yx D_xx - C_xy D_yy),
   // D = sum_i w_i (x_i - x_p)^2 per axis
@@ -245,9 +245,9 @@ void check_conservation(bool periodic) {
   // G2P back with dt = 0: mass-weighted momentum and (APIC) angular momentum preserved
   GridUpdateParams q;
   q.dt = 0.0;
-  grid_update(g, G, q, nullptr);
+  grid_update(g, g.all_nodes(), G, q, nullptr);
   double* vel[] = {G.vx, G.vy};
-  fill_periodic_ghosts(g, vel, 2);
+  fill_periodic_ghosts(g, g.all_nodes(), vel, 2);
   g2p<S, false, G2PWhat::Full>(g, G, pv, P.size(), G2PParams{0.0, 0.25, 0.0});
   double Px2 = 0, Py2 = 0, Lz2 = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
@@ -282,7 +282,7 @@ void check_colored_vs_serial(bool apic) {
   Bins b = bin(g, P);
   Grid a(g, false), s(g, false), t(g, false);
   auto A = a.view(), Sg = s.view(), T = t.view();
-  for (auto* G : {&A, &Sg, &T}) clear_grid(g, *G, true);
+  for (auto* G : {&A, &Sg, &T}) clear_grid(g, g.all_nodes(), *G, true);
   if (apic) {
     p2g_colored<S, true, P2GWhat::All>(g, A, pv, b.order.data(), b.start.data(), 0.25);
     p2g_serial<S, true, P2GWhat::All>(g, Sg, pv, b.order.data(), P.size(), 0.25);
@@ -325,14 +325,119 @@ TEST_CASE("colored scatter is bitwise identical for 1 and 2 threads", "[transfer
   const int threads0 = omp_get_max_threads();
   omp_set_num_threads(1);
   auto A = a.view();
-  clear_grid(g, A, true);
+  clear_grid(g, g.all_nodes(), A, true);
   p2g_colored<QuadraticBSpline, true, P2GWhat::All>(g, A, pv, b.order.data(), b.start.data(), 0.25);
   omp_set_num_threads(2);
   auto C = c.view();
-  clear_grid(g, C, true);
+  clear_grid(g, g.all_nodes(), C, true);
   p2g_colored<QuadraticBSpline, true, P2GWhat::All>(g, C, pv, b.order.data(), b.start.data(), 0.25);
   omp_set_num_threads(threads0);
   REQUIRE(a.m == c.m);
   REQUIRE(a.px == c.px);
   REQUIRE(a.fy == c.fy);
+}
+
+namespace {
+
+// One USL and one MUSL transfer (FLIP, slip walls) of particles that occupy part of the grid,
+// once over the whole grid (A, zeroed) and once over occupied_nodes only (B, every node first
+// set to NaN): a read outside the box would put a NaN into the particles.
+template <class S>
+void check_occupied_box(bool periodic) {
+  GridGeom g = make_geom(periodic);
+  g.nx = 61;
+  g.ny = 45;
+  Particles P = random_particles(g, 4000, 21);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> X(g.x0 + 17.3 * g.h, g.x0 + 40.6 * g.h), Y(g.y0 + 9.5 * g.h, g.y0 + 25.2 * g.h);
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    if (!periodic) P.x[i] = X(rng);
+    P.y[i] = Y(rng);
+  }
+  // the stencils' extremes: a point on the lower edge of a tile's first cell (it reaches the
+  // node below that cell) and one at the top of a tile's last cell (two nodes above it)
+  P.x[0] = g.x0 + 16 * g.h;
+  P.y[0] = g.y0 + 24 * g.h;
+  P.x[1] = g.x0 + 47.999 * g.h;
+  P.y[1] = g.y0 + 31.999 * g.h;
+  Bins b = bin(g, P);
+  const NodeBox box = occupied_nodes(g, b.start.data());
+  // the box is the occupied tiles' node blocks, not the grid
+  REQUIRE(box.j0 == 8 - 1);
+  REQUIRE(box.j1 == 31 + 2);
+  if (periodic) {
+    REQUIRE(box.i0 == -g.pad);
+    REQUIRE(box.i1 == g.nx + g.pad);
+  } else {
+    REQUIRE(box.i0 == 16 - 1);
+    REQUIRE(box.i1 == 47 + 2);
+  }
+  GridUpdateParams q;
+  q.dt = 1e-4;
+  q.gravity_y = -9.81;
+  q.walls = Walls{Wall::Slip, Wall::Slip, Wall::Slip, Wall::Slip};
+  q.flip = true;
+  const G2PParams gq{q.dt, 0.25, 0.95};
+  auto transfer = [&](Grid& grid, const NodeBox& nb, Particles& Q, bool musl, std::vector<double>& rf) {
+    auto G = grid.view();
+    auto pv = Q.view();
+    clear_grid(g, nb, G, true);
+    p2g_colored<S, false, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
+    double* sums[] = {G.m, G.px, G.py, G.fx, G.fy};
+    fold_periodic(g, nb, sums, 5);
+    grid_update(g, nb, G, q, rf.data());
+    double* vel[] = {G.vx, G.vy, G.dvx, G.dvy};
+    fill_periodic_ghosts(g, nb, vel, 4);
+    if (!musl) {
+      g2p<S, true, G2PWhat::Full>(g, G, pv, Q.size(), gq);
+      return;
+    }
+    g2p<S, true, G2PWhat::Velocity>(g, G, pv, Q.size(), gq);
+    clear_grid(g, nb, G, false);
+    p2g_colored<S, false, P2GWhat::Momentum>(g, G, pv, b.order.data(), b.start.data(), 0.25);
+    fold_periodic(g, nb, sums + 1, 2);
+    grid_velocity_from_momentum(g, nb, G, q);
+    fill_periodic_ghosts(g, nb, vel, 2);
+    g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, Q.size(), gq);
+  };
+  for (bool musl : {false, true}) {
+    INFO("musl " << musl);
+    Particles PA = P, PB = P;
+    Grid a(g, true), c(g, true);
+    for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::fx, &Grid::fy, &Grid::vx, &Grid::vy, &Grid::dvx, &Grid::dvy})
+      std::fill((c.*arr).begin(), (c.*arr).end(), std::nan(""));
+    std::vector<double> rfa(kRowSlots * static_cast<std::size_t>(g.sy()), 1.0), rfb = rfa;
+    transfer(a, g.all_nodes(), PA, musl, rfa);
+    transfer(c, box, PB, musl, rfb);
+    for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::Lxx, &Particles::Lxy,
+                   &Particles::Lyx, &Particles::Lyy})
+      REQUIRE(PA.*f == PB.*f);
+    REQUIRE(rfa == rfb);  // wall reactions, 0 on the rows outside the box
+    // inside the box the grids agree; outside, the box pass wrote nothing
+    std::size_t outside = 0;
+    for (int j = -g.pad; j <= g.ny + g.pad; ++j)
+      for (int i = -g.pad; i <= g.nx + g.pad; ++i) {
+        const auto n = g.node(i, j);
+        const bool in = i >= box.i0 && i <= box.i1 && j >= box.j0 && j <= box.j1;
+        outside += !in;
+        for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::vx, &Grid::vy}) {
+          if (in) REQUIRE((a.*arr)[n] == (c.*arr)[n]);
+          else REQUIRE(std::isnan((c.*arr)[n]));
+        }
+      }
+    REQUIRE(outside > 0);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("grid passes over the occupied nodes only: the same transfer, nothing outside read or written",
+          "[transfer][grid]") {
+  for (bool periodic : {false, true}) {
+    INFO("periodic " << periodic);
+    check_occupied_box<Linear>(periodic);
+    check_occupied_box<UGIMP>(periodic);
+    check_occupied_box<QuadraticBSpline>(periodic);
+    check_occupied_box<CubicBSpline>(periodic);
+  }
 }
