@@ -204,7 +204,8 @@ def tables(results, roof):
     for r in sorted(results, key=lambda r: (r["scene"], float(r["size"]), r["threads"])):
         n = r["particles"] * r["steps"]
         cfg = r["solver"]
-        npp = r["nodes"] / r["particles"]
+        # the grid passes work on the occupied box of nodes (run.json active_nodes, since session 5)
+        npp = r.get("active_nodes", r["nodes"]) / r["particles"]
         R = roof[r["threads"]]
         for ph in PHASES:
             t = r["phase_seconds"].get(ph, 0.0)

@@ -89,6 +89,7 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   t.insert("threads", threads);
   t.insert("particles", static_cast<int64_t>(sim.particles().size()));
   t.insert("nodes", static_cast<int64_t>(sim.grid().geom.num_nodes()));
+  t.insert("active_nodes", sim.mean_active_nodes());  // per step, the grid passes' box (mean)
   t.insert("steps", static_cast<int64_t>(s.steps));
   t.insert("end_time_s", s.end_time);
   t.insert("wall_seconds", s.wall_seconds);

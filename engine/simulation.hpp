@@ -74,6 +74,9 @@ class Simulation {
 
   double time() const { return time_; }
   long steps() const { return steps_; }
+  // Nodes per step the grid passes worked on (the occupied box, kern::occupied_nodes), mean
+  // over the steps taken; the grid holds grid().geom.num_nodes().
+  double mean_active_nodes() const { return steps_ > 0 ? box_nodes_ / double(steps_) : 0.0; }
   double last_dt() const { return last_dt_; }
   double stable_dt() const;  // the step the next step() would take: CFL, heat conduction limit
   double heat_dt() const { return heat_dt_; }  // explicit conduction limit [s] (inf when off)
@@ -124,6 +127,7 @@ class Simulation {
   // binning
   std::vector<std::uint32_t> key_, order_, cell_start_, hist_;
   kern::NodeBox box_;  // the nodes this step's particles reach: every grid pass stays inside
+  double box_nodes_ = 0.0;  // sum over steps of the box's node count
   std::vector<double> scratch_d_;
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;

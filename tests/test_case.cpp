@@ -94,3 +94,26 @@ TEST_CASE("a particle whose volume turns non-positive stops the run with a clear
   CHECK(has(json, "\"status\" : \"failed\""));
   std::filesystem::remove_all(out);
 }
+
+TEST_CASE("run.json reports the nodes the grid passes worked on: the occupied box, not the grid", "[case][grid]") {
+  auto doc = toml::parse(kCase);
+  apply_overrides(doc, {"run.end_time_ns=2.0"});
+  Scene sc = build_scene(doc, "t", ".");
+  const auto out = std::filesystem::temp_directory_path() / "smpm_test_active_nodes";
+  std::filesystem::remove_all(out);
+  const auto s = run_scene(sc, {out, 0, true});
+  REQUIRE(s.status == "completed");
+  std::ifstream j(out / "run.json");
+  const std::string json((std::istreambuf_iterator<char>(j)), std::istreambuf_iterator<char>());
+  const auto number = [&](const std::string& key) {
+    const auto at = json.find("\"" + key + "\" : ");
+    REQUIRE(at != std::string::npos);
+    return std::stod(json.substr(at + key.size() + 5));
+  };
+  // 8 x 20 cells, 2 ghost nodes a side: 13 x 25 nodes. The body fills the lower half (cells 0-9,
+  // tile rows 0 and 1 of 8 cells): node rows -1 .. 17 (the tiles' blocks), all 13 columns
+  // (periodic x)
+  CHECK(number("nodes") == 13 * 25);
+  CHECK(number("active_nodes") == 13 * 19);
+  std::filesystem::remove_all(out);
+}
