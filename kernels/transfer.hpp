@@ -280,9 +280,13 @@ struct G2PParams {
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
 // error is what remains. Needs the scatter's velocity p / m in px, py (the grid update's
 // scatter_velocity, ghosts filled).
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
+//
+// PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
+// the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false, bool PureFlip = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q) {
+  static_assert(!PureFlip || (FLIP && What == G2PWhat::Velocity), "PureFlip is the FLIP velocity pass");
   constexpr int N = Shape::N;
   const double inv_h = 1.0 / g.h;
   const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
@@ -311,9 +315,11 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     for (int a = 0; a < N; ++a) {
       const std::size_t n = row + a;
       const double w = wx[a] * wy[b];
-      const double gvx = G.vx[n], gvy = G.vy[n];
-      vx += w * gvx;
-      vy += w * gvy;
+      const double gvx = PureFlip ? 0.0 : G.vx[n], gvy = PureFlip ? 0.0 : G.vy[n];
+      if constexpr (!PureFlip) {
+        vx += w * gvx;
+        vy += w * gvy;
+      }
       if constexpr (Heat) {
         v2 += w * (gvx * gvx + gvy * gvy);
         const double dx = (bx + a) - xg;  // px, py hold the scatter's velocity p / m here
@@ -362,7 +368,10 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     }
   }
   if constexpr (What != G2PWhat::PositionGradient) {
-    if constexpr (FLIP) {
+    if constexpr (PureFlip) {
+      P.vx[p] = P.vx[p] + dvx;
+      P.vy[p] = P.vy[p] + dvy;
+    } else if constexpr (FLIP) {
       P.vx[p] = q.flip_alpha * (P.vx[p] + dvx) + (1.0 - q.flip_alpha) * vx;
       P.vy[p] = q.flip_alpha * (P.vy[p] + dvy) + (1.0 - q.flip_alpha) * vy;
     } else {
@@ -393,8 +402,8 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
 // run in the same order, each operation rounded as written (-ffp-contract=off), in the vector
 // body and the remainder: bitwise the same for any thread count (tests/test_contact.cpp,
 // tests/test_elastic.cpp, "determinism").
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
-void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, bool Contact, bool PureFlip>
+void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
 #pragma omp parallel
   {
     const GridGeom gl = g;
@@ -402,8 +411,18 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
     const ParticleView Pl = P;
     const G2PParams ql = q;
 #pragma omp for simd schedule(static)
-    for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact>(gl, Gl, Pl, p, ql);
+    for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql);
   }
+}
+
+// The FLIP velocity pass with flip_alpha = 1 (MUSL, pure FLIP) takes the PureFlip body: the same
+// velocities, up to the sign of a zero.
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
+void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
+  if constexpr (FLIP && What == G2PWhat::Velocity && !Heat && !Contact) {
+    if (q.flip_alpha == 1.0) return g2p_loop<Shape, FLIP, What, Heat, Contact, true>(g, G, P, n, q);
+  }
+  g2p_loop<Shape, FLIP, What, Heat, Contact, false>(g, G, P, n, q);
 }
 
 }  // namespace smpm::kern

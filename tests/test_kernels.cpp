@@ -441,3 +441,27 @@ TEST_CASE("grid passes over the occupied nodes only: the same transfer, nothing 
     check_occupied_box<CubicBSpline>(periodic);
   }
 }
+
+TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities without the PIC sum",
+          "[transfer]") {
+  const GridGeom g = make_geom(false);
+  Particles P = random_particles(g, 3000, 17);
+  Bins b = bin(g, P);
+  Grid grid(g, true);
+  auto G = grid.view();
+  auto pv = P.view();
+  clear_grid(g, g.all_nodes(), G, true);
+  p2g_colored<Linear, false, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
+  GridUpdateParams q;
+  q.dt = 1e-4;
+  q.flip = true;
+  grid_update(g, g.all_nodes(), G, q, nullptr);
+  const G2PParams gq{q.dt, 0.25, 1.0};
+  Particles A = P, B = P;
+  auto pa = A.view(), pb = B.view();
+  g2p<Linear, true, G2PWhat::Velocity>(g, G, pa, A.size(), gq);                      // pure FLIP body
+  g2p_loop<Linear, true, G2PWhat::Velocity, false, false, false>(g, G, pb, B.size(), gq);  // the blend
+  REQUIRE(A.vx == B.vx);
+  REQUIRE(A.vy == B.vy);
+  REQUIRE(A.vx != P.vx);
+}
