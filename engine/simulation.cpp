@@ -119,7 +119,7 @@ void Simulation::step(double dt_max) {
   time_ += dt_;
   last_dt_ = dt_;
   ++steps_;
-  if (!box_.empty()) box_nodes_ += double(box_.i1 - box_.i0 + 1) * double(box_.j1 - box_.j0 + 1);
+  box_nodes_ += double(box_.nodes());
 }
 
 void Simulation::bin_particles() {

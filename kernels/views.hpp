@@ -11,6 +11,16 @@
 
 namespace smpm::kern {
 
+// A rectangle of nodes, i in [i0, i1], j in [j0, j1] (inclusive; ghosts included, so
+// -pad <= i0 and i1 <= nx + pad, the same for j). The grid passes of a step work on the box its
+// particles occupy (occupied_nodes, kernels/transfer.hpp): a scene that fills a third of its grid
+// (the elastic block) pays for a third of the grid traffic. Empty when i1 < i0 or j1 < j0.
+struct NodeBox {
+  int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
+  bool empty() const { return i1 < i0 || j1 < j0; }
+  std::size_t nodes() const { return empty() ? 0 : std::size_t(i1 - i0 + 1) * std::size_t(j1 - j0 + 1); }
+};
+
 // Uniform 2D grid of cells of size h. Nodes (i, j), i in [0, nx], j in [0, ny], sit at
 // (x0 + i h, y0 + j h). Node storage carries `pad` ghost columns/rows on every side so that
 // stencils of particles near the domain edge never need a bounds check; with periodic x the
@@ -37,19 +47,9 @@ struct GridGeom {
   std::size_t num_keys() const { return static_cast<std::size_t>(num_tiles()) * cells_per_tile(); }
   double length_x() const { return nx * h; }
   double length_y() const { return ny * h; }
-  struct NodeBox all_nodes() const;
+  NodeBox all_nodes() const { return NodeBox{-pad, nx + pad, -pad, ny + pad}; }
 };
 
-// A rectangle of nodes, i in [i0, i1], j in [j0, j1] (inclusive; ghosts included, so
-// -pad <= i0 and i1 <= nx + pad, the same for j). The grid passes of a step work on the box its
-// particles occupy (occupied_nodes, kernels/transfer.hpp): a scene that fills a third of its grid
-// (the elastic block) pays for a third of the grid traffic. Empty when i1 < i0 or j1 < j0.
-struct NodeBox {
-  int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
-  bool empty() const { return i1 < i0 || j1 < j0; }
-  int rows() const { return empty() ? 0 : j1 - j0 + 1; }
-};
-inline NodeBox GridGeom::all_nodes() const { return NodeBox{-pad, nx + pad, -pad, ny + pad}; }
 
 // With multi-body contact every array holds one block of num_nodes() values per velocity field
 // (field f of node n at n + f * fstride); fstride is 0 with a single field.
