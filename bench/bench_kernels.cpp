@@ -374,7 +374,9 @@ std::unique_ptr<Simulation> make_simulation(const StepTemplate& t) {
   cfg.cfl = kCfl;
   cfg.walls = slip_box();
   const Material m = Ph == Physics::Shock ? shock_material() : bench_material();
-  return std::make_unique<Simulation>(t.g, cfg, std::vector<Material>{m}, std::vector<int>{0}, t.P);
+  auto sim = std::make_unique<Simulation>(t.g, cfg, std::vector<Material>{m}, std::vector<int>{0}, t.P);
+  sim->store_gradient(false);  // as in a run between its statistics
+  return sim;
 }
 
 // Timed steps follow one untimed warm-up step, so the first timed step is not step 0: the

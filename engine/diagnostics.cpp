@@ -69,7 +69,7 @@ Moments moments(const std::vector<double>& v) {
 
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
-                                      const std::vector<int>& body_material) {
+                                      const std::vector<int>& body_material, bool gradient_current) {
   const std::size_t nr = regions.size();
   std::vector<std::vector<double>> p(nr), T(nr), rho(nr), uy(nr);
   std::vector<RegionStats> out(nr);
@@ -96,6 +96,7 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       s.D2 /= s.count;
       s.S2 /= s.count;
     }
+    if (!gradient_current) s.R2 = s.D2 = s.S2 = std::numeric_limits<double>::quiet_NaN();
     s.P = moments(p[r]);
     s.T = moments(T[r]);
     s.rho = moments(rho[r]);

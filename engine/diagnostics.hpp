@@ -54,8 +54,10 @@ struct RegionStats {
   Moments P, T, rho, Uy;        // [Pa], [K], [kg/m^3], [m/s]
   double R2 = 0, D2 = 0, S2 = 0;  // means [1/s^2]
 };
+// gradient_current: the particles' L belongs to their current state (Simulation::gradient_current);
+// if not (the last row of an interrupted or failed run), R2, D2 and S2 are NaN, not stale values.
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
-                                      const std::vector<int>& body_material);
+                                      const std::vector<int>& body_material, bool gradient_current = true);
 
 }  // namespace smpm

@@ -215,7 +215,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
   auto write_series = [&] {
     Timed t(s.diagnostics_seconds);
-    const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material());
+    const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material(),
+                                    sim.gradient_current());
     for (std::size_t r = 0; r < stats.size(); ++r) {
       const auto& st = stats[r];
       const double us2 = 1e-12;  // 1/s^2 -> 1/us^2
@@ -295,6 +296,11 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
         s.message = "stopped at run.max_steps = " + std::to_string(scene.run.max_steps);
         break;
       }
+      // L is stored on the particles only by the steps after which statistics are written (the
+      // step's dt is this min, as in step())
+      const double t_next = sim.time() + std::min(sim.stable_dt(), t_end - sim.time());
+      sim.store_gradient(t_next >= next_energy - eps || t_next >= t_end - eps ||
+                         (scene.run.max_steps > 0 && sim.steps() + 1 >= scene.run.max_steps));
       sim.step(t_end - sim.time());
       particle_steps += n;
       if (has_wall) {

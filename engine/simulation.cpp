@@ -113,8 +113,9 @@ void Simulation::step(double dt_max) {
   bin_particles();      // cell keys, counting sort by tile and cell
   scatter_to_grid();    // P2G: mass, momentum, internal force (colored, atomic-free)
   update_grid();        // momentum update with gravity, walls
-  gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap)
-  update_stress();      // volume, stress, pressure, energy; signal speed for the next dt
+  gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap); the
+                        // last pass updates volume, stress, pressure, energy block by block
+                        // behind it; signal speed for the next dt
   if (cfg_.heat_conduction) conduct_heat();  // grid conduction, heat back to the particles
   time_ += dt_;
   last_dt_ = dt_;
@@ -212,8 +213,46 @@ void Simulation::update_grid() {
   }
 }
 
+// The constitutive update of points [first, last), L their velocity gradient (element 0 = point
+// first), every material in turn (volume, stress, pressure, energy; the signal speed into acc).
+// The last gather pass calls it on each block of points it has gathered (kern::g2p_blocks);
+// thread 0 adds its time in it to thread0_seconds, the phase time reported as "constitutive".
+auto Simulation::stress_pass(double& thread0_seconds) {
+  const auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+  const kern::ConstitutiveState state{opt(P_.e), opt(P_.epsp), opt(P_.q), opt(P_.wp)};
+  std::vector<kern::ConstitutiveParams> params(materials_.size());
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    kern::ConstitutiveParams& q = params[k];
+    q.dt = dt_;
+    q.av_length = grid_.geom.h;
+    q.av_linear = cfg_.av_linear;
+    q.av_quadratic = cfg_.av_quadratic;
+    // spall: tension below -spall_strength, or expansion past rho0 / 2, fractures a point. The
+    // second catches hot debris whose energy term keeps the pressure up: at rho = 1e-5 rho0 its
+    // Mie-Grueneisen sound speed reached 1e8 m/s and stalled a porous run at dt = 1e-5 ns.
+    const bool spall = materials_[k].spall_strength > 0.0;
+    q.p_min = spall ? -materials_[k].spall_strength : -1e300;
+    q.rho_min = spall ? 0.5 * materials_[k].rho0 : 0.0;
+  }
+  return [this, pv = P_.view(), state, params = std::move(params), &thread0_seconds](
+             std::size_t first, std::size_t last, const kern::Gradient& L, kern::ConstitutiveResult& acc) {
+    const bool timed = omp_get_thread_num() == 0;
+    const double t0 = timed ? omp_get_wtime() : 0.0;
+    for (std::size_t k = 0; k < materials_.size(); ++k) {
+      const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
+      acc.merge(with_material(materials_[k], [&](const auto& eos, const auto& str) {
+        return kern::constitutive_block(pv, state, L, first, last, params[k], eos, str, sel);
+      }));
+    }
+    if (timed) thread0_seconds += omp_get_wtime() - t0;
+  };
+}
+
 void Simulation::gather_from_grid() {
-  Timed t(times_.g2p);
+  const double t_start = omp_get_wtime();
+  double stress_seconds = 0.0;
+  const auto stress = stress_pass(stress_seconds);
+  kern::ConstitutiveResult r;
   const auto& g = grid_.geom;
   auto G = grid_.view();
   const auto pv = pview();
@@ -226,6 +265,12 @@ void Simulation::gather_from_grid() {
   if (cfg_.walls.bottom != Wall::None) q.ymin = g.y0;
   if (cfg_.walls.top != Wall::None) q.ymax = std::nextafter(g.y0 + g.length_y(), g.y0);
   const bool flip = cfg_.transfer == Transfer::FLIP;
+  // L of each block in a per-thread buffer, unless asked to store it on the particles
+  const int threads = omp_get_max_threads();
+  if (!store_gradient_ && gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
+    gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
+  double* const keep = store_gradient_ ? nullptr : gather_scratch_.data();
+  using Result = kern::ConstitutiveResult;
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
     using kern::G2PWhat;
@@ -233,9 +278,9 @@ void Simulation::gather_from_grid() {
     if (cfg_.scheme == Scheme::USL) {
       auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
         constexpr bool C = decltype(contact)::value;
-        if (flip) kern::g2p<S, true, G2PWhat::Full, false, C>(g, G, pv, n, q);
-        else if (heat) kern::g2p<S, false, G2PWhat::Full, true, C>(g, G, pv, n, q);
-        else kern::g2p<S, false, G2PWhat::Full, false, C>(g, G, pv, n, q);
+        if (flip) r = kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, keep, stress);
+        else if (heat) r = kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, keep, stress);
+        else r = kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, keep, stress);
       };
       if (cfg_.contact) usl(std::true_type{});
       else usl(std::false_type{});
@@ -258,37 +303,13 @@ void Simulation::gather_from_grid() {
     kern::grid_velocity_from_momentum(g, box_, G, gq);
     double* vel[] = {G.vx, G.vy};
     kern::fill_periodic_ghosts(g, box_, vel, 2);
-    kern::g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, n, q);
+    r = kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, keep, stress);
   });
-}
-
-void Simulation::update_stress() {
-  Timed t(times_.constitutive);
-  auto pv = P_.view();
-  const std::size_t n = P_.size();
-  double vmax = 0.0;
-  auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
-  const kern::ConstitutiveState state{opt(P_.e), opt(P_.epsp), opt(P_.q), opt(P_.wp)};
-  kern::ConstitutiveParams params;
-  params.dt = dt_;
-  params.av_length = grid_.geom.h;
-  params.av_linear = cfg_.av_linear;
-  params.av_quadratic = cfg_.av_quadratic;
-  for (std::size_t k = 0; k < materials_.size(); ++k) {
-    const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
-    // spall: tension below -spall_strength, or expansion past rho0 / 2, fractures a point. The
-    // second catches hot debris whose energy term keeps the pressure up: at rho = 1e-5 rho0 its
-    // Mie-Grueneisen sound speed reached 1e8 m/s and stalled a porous run at dt = 1e-5 ns.
-    const bool spall = materials_[k].spall_strength > 0.0;
-    params.p_min = spall ? -materials_[k].spall_strength : -1e300;
-    params.rho_min = spall ? 0.5 * materials_[k].rho0 : 0.0;
-    const auto r = with_material(materials_[k], [&](const auto& eos, const auto& str) {
-      return kern::constitutive_update(pv, state, n, params, eos, str, sel);
-    });
-    check_volume(r.bad);
-    vmax = std::max(vmax, r.max_speed);
-  }
-  max_speed_ = vmax;
+  times_.constitutive += stress_seconds;
+  times_.g2p += omp_get_wtime() - t_start - stress_seconds;
+  if (store_gradient_) gradient_step_ = steps_ + 1;
+  check_volume(r.bad);
+  max_speed_ = r.max_speed;
 }
 
 void Simulation::conduct_heat() {
@@ -379,7 +400,7 @@ std::size_t Simulation::bytes() const {
   return P_.bytes() + grid_.bytes() +
          (key_.capacity() + order_.capacity() + cell_start_.capacity() + hist_.capacity() + scratch_u_.capacity()) *
              sizeof(std::uint32_t) +
-         scratch_d_.capacity() * sizeof(double) + scratch_b_.capacity();
+         (scratch_d_.capacity() + gather_scratch_.capacity()) * sizeof(double) + scratch_b_.capacity();
 }
 
 }  // namespace smpm

@@ -78,6 +78,14 @@ class Simulation {
   // over the steps taken; the grid holds grid().geom.num_nodes().
   double mean_active_nodes() const { return steps_ > 0 ? box_nodes_ / double(steps_) : 0.0; }
   double last_dt() const { return last_dt_; }
+  // Whether step() stores the velocity gradient L [1/s] on the particles (particles().Lxx ...,
+  // which the regional statistics read). Default on. Off, the constitutive update takes L from
+  // the last gather pass's block buffer (kern::g2p_blocks) and the particles' L arrays keep the
+  // values of the last step that stored them: 96 B less memory traffic per point and step. The
+  // driver turns it on for the steps after which it writes statistics.
+  void store_gradient(bool on) { store_gradient_ = on; }
+  // The particles' L is that of the last step taken (stored by it, or no step taken yet).
+  bool gradient_current() const { return gradient_step_ == steps_; }
   double stable_dt() const;  // the step the next step() would take: CFL, heat conduction limit
   double heat_dt() const { return heat_dt_; }  // explicit conduction limit [s] (inf when off)
   const std::vector<Thermo>& thermo() const { return thermo_; }
@@ -109,7 +117,8 @@ class Simulation {
   void scatter_to_grid();
   void update_grid();
   void gather_from_grid();
-  void update_stress();
+  // the constitutive update of a block of points, which the last gather pass calls (its L)
+  auto stress_pass(double& thread0_seconds);
   void conduct_heat();
 
   void check_volume(std::ptrdiff_t bad) const;
@@ -129,6 +138,7 @@ class Simulation {
   kern::NodeBox box_;  // the nodes this step's particles reach: every grid pass stays inside
   double box_nodes_ = 0.0;  // sum over steps of the box's node count
   std::vector<double> scratch_d_;
+  std::vector<double> gather_scratch_;  // L of a block per thread (kern::g2p_blocks), when not stored
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;
   std::vector<double> row_force_;
@@ -143,6 +153,8 @@ class Simulation {
   double mass_eps_ = 0.0;  // grid nodes lighter than this get no force (see GridUpdateParams)
   double time_ = 0.0, dt_ = 0.0, last_dt_ = 0.0, max_speed_ = 0.0;
   long steps_ = 0;
+  bool store_gradient_ = true;
+  long gradient_step_ = 0;  // the step count after the last step that stored L
   WallForces wall_;
   PhaseTimes times_;
 };

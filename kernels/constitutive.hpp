@@ -174,6 +174,11 @@ struct Selection {
 struct ConstitutiveResult {
   double max_speed = 0.0;   // max over particles of the signal speed [m/s], for the next dt
   std::ptrdiff_t bad = -1;  // lowest index of a particle whose volume became non-positive or NaN
+  // the result of two sets of points together (max and min: the order of merging does not matter)
+  void merge(const ConstitutiveResult& o) {
+    max_speed = std::max(max_speed, o.max_speed);
+    if (o.bad >= 0 && (bad < 0 || o.bad < bad)) bad = o.bad;
+  }
 };
 
 // The loop body is branch-free (both sides of every test computed, one selected, no division
@@ -186,43 +191,49 @@ struct ConstitutiveResult {
 // reference is an unsupported masked load); bitwise | and & on the tests, not || and &&
 // (short-circuit masks did not convert). The vector body and the remainder do the same
 // operations in the same order, each rounded as written (-ffp-contract=off), so a result does
-// not depend on which one processes a particle: bitwise the same for any thread count
-// (tests/test_contact.cpp and tests/test_elastic.cpp, "determinism").
+// not depend on which one processes a particle, nor on where a block or a thread's share
+// begins: bitwise the same for any thread count and block split (tests/test_contact.cpp and
+// tests/test_elastic.cpp, "determinism").
+//
+// Points [first, last) on the calling thread; L.xx[i] ... is the gradient of point first + i.
 template <bool Selective, bool HasE, bool HasQ, bool HasWp, class Eos, class Strength>
-ConstitutiveResult constitutive_update_impl(const ParticleView& P, const ConstitutiveState& S, std::size_t n,
-                                            const ConstitutiveParams& q, const Eos& eos, const Strength& str,
-                                            Selection sel) {
+ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
+                                      std::size_t first, std::size_t last, const ConstitutiveParams& q,
+                                      const Eos& eos, const Strength& str, Selection sel) {
+  const std::size_t cnt = last - first;
   double vmax = 0.0;
-  std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(n);
+  std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(cnt);
   const double dt = q.dt, l = q.av_length, p_min = q.p_min, rho_min = q.rho_min;
   const double cQ = q.av_quadratic, cL = q.av_linear;
   // a fractured point's signal speed: the sound speed at rest (its stress is zero)
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
-  // every array through a local restrict pointer: the view's members might alias the stores,
-  // so the compiler would reload them for every point
-  const double* __restrict Lxxp = P.Lxx;
-  const double* __restrict Lxyp = P.Lxy;
-  const double* __restrict Lyxp = P.Lyx;
-  const double* __restrict Lyyp = P.Lyy;
-  const double* __restrict mp = P.m;
-  const double* __restrict vxp = P.vx;
-  const double* __restrict vyp = P.vy;
-  double* __restrict Vp = P.V;
-  double* __restrict sxxp = P.sxx;
-  double* __restrict syyp = P.syy;
-  double* __restrict sxyp = P.sxy;
-  double* __restrict pp = P.p;
-  double* __restrict ep = S.e;
-  double* __restrict qp = S.q;
-  double* __restrict epspp = S.epsp;
-  double* __restrict wpp = S.wp;
-#pragma omp parallel for simd schedule(static) reduction(max : vmax) reduction(min : bad)
-  for (std::size_t p = 0; p < n; ++p) {
-    const bool on = !Selective || sel.select[sel.body[p]];
+  // every array through a local restrict pointer to the range's first point: the view's
+  // members might alias the stores, so the compiler would reload them for every point
+  const double* __restrict Lxxp = L.xx;
+  const double* __restrict Lxyp = L.xy;
+  const double* __restrict Lyxp = L.yx;
+  const double* __restrict Lyyp = L.yy;
+  const double* __restrict mp = P.m + first;
+  const double* __restrict vxp = P.vx + first;
+  const double* __restrict vyp = P.vy + first;
+  double* __restrict Vp = P.V + first;
+  double* __restrict sxxp = P.sxx + first;
+  double* __restrict syyp = P.syy + first;
+  double* __restrict sxyp = P.sxy + first;
+  double* __restrict pp = P.p + first;
+  double* __restrict ep = HasE ? S.e + first : nullptr;
+  double* __restrict qp = HasQ ? S.q + first : nullptr;
+  double* __restrict epspp = Strength::plastic ? S.epsp + first : nullptr;
+  double* __restrict wpp = HasWp ? S.wp + first : nullptr;
+  const std::uint8_t* __restrict bodyp = Selective ? sel.body + first : nullptr;
+  const std::uint8_t* __restrict selectp = sel.select;
+#pragma omp simd reduction(max : vmax) reduction(min : bad)
+  for (std::size_t p = 0; p < cnt; ++p) {
+    const bool on = !Selective || selectp[bodyp[p]];
     const double lxx = Lxxp[p], lxy = Lxyp[p], lyx = Lyxp[p], lyy = Lyyp[p];
     const double jinc = (1.0 + dt * lxx) * (1.0 + dt * lyy) - dt * dt * lxy * lyx;
     const double V0 = Vp[p], V = V0 * jinc;
-    bad = std::min(bad, on & !(V > 0.0) ? static_cast<std::ptrdiff_t>(p) : static_cast<std::ptrdiff_t>(n));
+    bad = std::min(bad, on & !(V > 0.0) ? static_cast<std::ptrdiff_t>(p) : static_cast<std::ptrdiff_t>(cnt));
     const double m = mp[p], rho = m / V;
     const double dxy = 0.5 * (lxy + lyx), w = 0.5 * (lxy - lyx), trD = lxx + lyy;
     const double a0 = sxxp[p], b0 = syyp[p], c0 = sxyp[p];
@@ -278,26 +289,46 @@ ConstitutiveResult constitutive_update_impl(const ParticleView& P, const Constit
     if constexpr (HasQ) qp[p] = on ? (fractured ? 0.0 : qv) : qp[p];
     if constexpr (HasWp) wpp[p] += on ? Wp * V / m : 0.0;
   }
-  return {vmax, bad == static_cast<std::ptrdiff_t>(n) ? -1 : bad};
+  return {vmax, bad == static_cast<std::ptrdiff_t>(cnt) ? -1 : static_cast<std::ptrdiff_t>(first) + bad};
 }
 
+// The constitutive update of points [first, last) on the calling thread, L as above (the
+// particles' arrays at first, or a block buffer of kern::g2p_blocks): the optional state
+// (energy, viscosity, plastic work, selection) chosen at run time, each combination its own loop.
 template <class Eos, class Strength>
-ConstitutiveResult constitutive_update(const ParticleView& P, const ConstitutiveState& S, std::size_t n,
-                                       const ConstitutiveParams& q, const Eos& eos, const Strength& str,
-                                       Selection sel = {}) {
+ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
+                                      std::size_t first, std::size_t last, const ConstitutiveParams& q,
+                                      const Eos& eos, const Strength& str, Selection sel = {}) {
   const bool e = S.e != nullptr, qv = S.q != nullptr, wp = S.wp != nullptr, selective = sel.select != nullptr;
   using T = std::true_type;
   using F = std::false_type;
   auto run = [&](auto Sel, auto E, auto Q) {
     constexpr bool s_ = decltype(Sel)::value, e_ = decltype(E)::value, q_ = decltype(Q)::value;
-    return wp ? constitutive_update_impl<s_, e_, q_, true>(P, S, n, q, eos, str, sel)
-              : constitutive_update_impl<s_, e_, q_, false>(P, S, n, q, eos, str, sel);
+    return wp ? constitutive_range<s_, e_, q_, true>(P, S, L, first, last, q, eos, str, sel)
+              : constitutive_range<s_, e_, q_, false>(P, S, L, first, last, q, eos, str, sel);
   };
   auto by_state = [&](auto Sel) {
     if (e) return qv ? run(Sel, T{}, T{}) : run(Sel, T{}, F{});
     return qv ? run(Sel, F{}, T{}) : run(Sel, F{}, F{});
   };
   return selective ? by_state(T{}) : by_state(F{});
+}
+
+// The constitutive update of all n points, L in the particles' arrays, each thread its share
+// (thread_share). The engine runs it inside the last gather pass instead (kern::g2p_blocks).
+template <class Eos, class Strength>
+ConstitutiveResult constitutive_update(const ParticleView& P, const ConstitutiveState& S, std::size_t n,
+                                       const ConstitutiveParams& q, const Eos& eos, const Strength& str,
+                                       Selection sel = {}) {
+  ConstitutiveResult r;
+#pragma omp parallel
+  {
+    const auto [b, e] = thread_share(n);
+    const ConstitutiveResult own = constitutive_block(P, S, Gradient::of(P) + b, b, e, q, eos, str, sel);
+#pragma omp critical(smpm_constitutive_merge)
+    r.merge(own);
+  }
+  return r;
 }
 
 template <class Eos, class Strength>

@@ -285,7 +285,7 @@ struct G2PParams {
 // the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false, bool PureFlip = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
-                         const G2PParams& q) {
+                         const G2PParams& q, const Gradient& Lout, std::size_t li) {
   static_assert(!PureFlip || (FLIP && What == G2PWhat::Velocity), "PureFlip is the FLIP velocity pass");
   constexpr int N = Shape::N;
   const double inv_h = 1.0 / g.h;
@@ -388,8 +388,8 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     x = x >= g.x0 + L ? x - L : x;
     P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
     P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
-    P.Lxx[p] = lxx * inv_h; P.Lxy[p] = lxy * inv_h;
-    P.Lyx[p] = lyx * inv_h; P.Lyy[p] = lyy * inv_h;
+    Lout.xx[li] = lxx * inv_h; Lout.xy[li] = lxy * inv_h;
+    Lout.yx[li] = lyx * inv_h; Lout.yy[li] = lyy * inv_h;
   }
 }
 
@@ -410,8 +410,10 @@ void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::
     const GridView Gl = G;
     const ParticleView Pl = P;
     const G2PParams ql = q;
+    const Gradient Ll = Gradient::of(P);
 #pragma omp for simd schedule(static)
-    for (std::size_t p = 0; p < n; ++p) g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql);
+    for (std::size_t p = 0; p < n; ++p)
+      g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql, Ll, p);
   }
 }
 
@@ -423,6 +425,51 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
     if (q.flip_alpha == 1.0) return g2p_loop<Shape, FLIP, What, Heat, Contact, true>(g, G, P, n, q);
   }
   g2p_loop<Shape, FLIP, What, Heat, Contact, false>(g, G, P, n, q);
+}
+
+// The pass that forms L (USL's gather, MUSL's position pass) with the work that reads L done
+// block by block right behind it: each thread gathers its share of the points (thread_share) in
+// blocks of kGatherBlock points and, after each block, calls after(first, last, L, acc) on it
+// while the block's L is in cache (the engine's constitutive update; L.xx[i] ... is the
+// gradient of point first + i). With scratch null, L goes to the particles' arrays as with g2p;
+// else to thread t's buffer at scratch + t * kGatherScratch (4 x kGatherBlock doubles, 256 KiB,
+// in L2), and the particles' L arrays are left as they were: the 64 B per point of storing L
+// (write and write-allocate) and the 32 B of reading it back are saved. Acc: the per-thread
+// result of `after`, merged with Acc::merge (whose order must not matter). The gathered values
+// are those of g2p, bitwise (the same particle body; tests/test_kernels.cpp). The block size:
+// blocks of 256-2048 points made the gather 2-6 ns per point slower on one thread (each block
+// restarts the prefetch streams of both loops, about 20 arrays); 4096-16384 measured alike
+// (docs/performance.md, "What was tried").
+inline constexpr std::size_t kGatherBlock = 8192;
+inline constexpr std::size_t kGatherScratch = 4 * kGatherBlock;  // doubles per thread
+
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, bool Contact, class Acc, class After>
+Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
+               double* scratch, After&& after) {
+  static_assert(What != G2PWhat::Velocity, "the velocity pass forms no L");
+  Acc total{};
+#pragma omp parallel
+  {
+    const GridGeom gl = g;
+    const GridView Gl = G;
+    const ParticleView Pl = P;
+    const G2PParams ql = q;
+    double* const buf = scratch ? scratch + kGatherScratch * static_cast<std::size_t>(omp_get_thread_num()) : nullptr;
+    const auto [begin, end] = thread_share(n);
+    Acc own{};
+    for (std::size_t first = begin; first < end; first += kGatherBlock) {
+      const std::size_t last = std::min(first + kGatherBlock, end);
+      const Gradient L = buf ? Gradient{buf, buf + kGatherBlock, buf + 2 * kGatherBlock, buf + 3 * kGatherBlock}
+                             : Gradient::of(Pl) + first;
+#pragma omp simd
+      for (std::size_t p = first; p < last; ++p)
+        g2p_particle<Shape, FLIP, What, Heat, Contact>(gl, Gl, Pl, p, ql, L, p - first);
+      after(first, last, L, own);
+    }
+#pragma omp critical(smpm_g2p_blocks)
+    total.merge(own);
+  }
+  return total;
 }
 
 }  // namespace smpm::kern

@@ -1,9 +1,13 @@
 // Plain-pointer views of the particle and grid arrays the kernels work on.
 // The engine owns the storage (engine/particles.hpp, engine/grid.hpp); kernels never allocate.
 #pragma once
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
+#include <utility>
+
+#include <omp.h>
 
 // Everything called per particle inside a vectorized particle loop is forced inline: GCC 12
 // kept such calls out of line otherwise (measured with perf), and a call keeps a loop scalar.
@@ -95,6 +99,25 @@ struct ParticleView {
   const std::uint8_t* body = nullptr;
   const std::uint8_t* body_field = nullptr;
   std::size_t field(std::size_t p) const { return body_field ? body_field[body[p]] : 0; }
+};
+
+// The calling thread's share [begin, end) of n items in an omp parallel region: contiguous
+// shares in thread order, as schedule(static) splits a loop.
+inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
+  const std::size_t t = static_cast<std::size_t>(omp_get_thread_num());
+  const std::size_t nt = static_cast<std::size_t>(omp_get_num_threads());
+  const std::size_t q = n / nt, r = n % nt;
+  const std::size_t begin = t * q + std::min(t, r);
+  return {begin, begin + q + (t < r ? 1 : 0)};
+}
+
+// Where the last gather pass stores the velocity gradient L [1/s] and the constitutive update
+// reads it: the particles' own arrays (ParticleView::Lxx...), or a block buffer of
+// kern::g2p_blocks that holds it for one block of points (element 0 = the block's first point).
+struct Gradient {
+  double* xx; double* xy; double* yx; double* yy;
+  static Gradient of(const ParticleView& P) { return {P.Lxx, P.Lxy, P.Lyx, P.Lyy}; }
+  Gradient operator+(std::size_t k) const { return {xx + k, xy + k, yx + k, yy + k}; }
 };
 
 }  // namespace smpm::kern

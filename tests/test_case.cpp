@@ -10,6 +10,7 @@
 #include "engine/case_reader.hpp"
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
+#include "engine/simulation.hpp"
 
 using namespace smpm;
 
@@ -115,5 +116,58 @@ TEST_CASE("run.json reports the nodes the grid passes worked on: the occupied bo
   // (periodic x)
   CHECK(number("nodes") == 13 * 25);
   CHECK(number("active_nodes") == 13 * 19);
+  std::filesystem::remove_all(out);
+}
+
+TEST_CASE("L is stored only where asked: the same run, the statistics rows read a current L", "[case][diagnostics]") {
+  auto doc = toml::parse(kCase);
+  Scene sc = build_scene(doc, "t", ".");
+  Simulation a(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  Simulation b(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  b.store_gradient(false);
+  REQUIRE(b.gradient_current());  // no step taken: L is the initial one
+  const Particles L0 = b.particles();
+  for (int s = 1; s <= 30; ++s) {
+    b.store_gradient(s % 10 == 0);
+    a.step();
+    b.step();
+    INFO("step " << s);
+    REQUIRE(a.gradient_current());
+    REQUIRE(b.gradient_current() == (s % 10 == 0));
+    const Particles &A = a.particles(), &B = b.particles();
+    for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::V, &Particles::sxx,
+                   &Particles::syy, &Particles::sxy, &Particles::p})
+      REQUIRE(A.*f == B.*f);
+    if (s % 10 == 0)
+      for (auto f : {&Particles::Lxx, &Particles::Lxy, &Particles::Lyx, &Particles::Lyy}) REQUIRE(A.*f == B.*f);
+    if (s < 10)  // never stored: the initial arrays, in the same order (no permutation after step 0)
+      for (auto f : {&Particles::Lxx, &Particles::Lyy}) REQUIRE(B.*f == L0.*f);
+  }
+  REQUIRE(a.time() == b.time());
+  // the driver stores L for the steps its statistics follow: every row's gradient measures are
+  // numbers (a row read from a stale L would be NaN), the last row included
+  auto doc2 = toml::parse(std::string(kCase) + "\n[[regions]]\nname = \"all\"\ny_range_um = [0.0, 60.0]\n");
+  apply_overrides(doc2, {"run.end_time_ns=3.0", "run.diagnostics_interval_ns=0.7"});
+  Scene sc2 = build_scene(doc2, "t", ".");
+  const auto out = std::filesystem::temp_directory_path() / "smpm_test_store_gradient";
+  std::filesystem::remove_all(out);
+  REQUIRE(run_scene(sc2, {out, 0, true}).status == "completed");
+  std::ifstream series(out / "series.csv");
+  std::string line;
+  std::getline(series, line);
+  int rows = 0;
+  bool moving = false;
+  while (std::getline(series, line)) {
+    ++rows;
+    INFO(line);
+    std::vector<double> col;
+    std::size_t at = 0;
+    for (std::size_t next; (next = line.find(',', at)) != std::string::npos; at = next + 1)
+      col.push_back(std::strtod(line.c_str() + at, nullptr));
+    for (int c : {11, 12, 13}) REQUIRE(std::isfinite(col[c]));  // R2, D2, S2 [1/us^2]
+    moving = moving || col[13] > 0;
+  }
+  CHECK(rows >= 5);  // t = 0, 0.7, 1.4, 2.1, 2.8 ns and the end (regions as the case gives them)
+  CHECK(moving);
   std::filesystem::remove_all(out);
 }

@@ -73,6 +73,12 @@ TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
   CHECK(s[1].P.std == Approx(0.5e9));
   CHECK(s[1].D2 == Approx(1e12 / 2));  // mean over the region's 2 particles
   CHECK(s[0].T.mean == Approx(300.0));  // no energy field: T0
+  // L not current (the last row of an interrupted or failed run): no gradient measures, the rest as before
+  const auto stale = region_stats(P, regions, th, {m}, {0, 0}, false);
+  CHECK(std::isnan(stale[1].D2));
+  CHECK(std::isnan(stale[1].R2));
+  CHECK(std::isnan(stale[1].S2));
+  CHECK(stale[1].P.mean == s[1].P.mean);
 }
 
 TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {

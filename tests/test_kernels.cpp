@@ -8,6 +8,7 @@
 
 #include "engine/grid.hpp"
 #include "engine/particles.hpp"
+#include "kernels/constitutive.hpp"
 #include "kernels/grid_update.hpp"
 #include "kernels/shape.hpp"
 #include "kernels/sort.hpp"
@@ -464,4 +465,91 @@ TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities
   REQUIRE(A.vx == B.vx);
   REQUIRE(A.vy == B.vy);
   REQUIRE(A.vx != P.vx);
+}
+
+namespace {
+
+// The last gather pass with the constitutive update behind it, block by block (g2p_blocks), against
+// the two passes one after the other (g2p, then constitutive_update over all points): for USL
+// (APIC, quadratic B-spline; Mie-Grueneisen, J2, energy, viscosity) and MUSL's position pass
+// (linear hat; linear EOS, elastic), with L stored or kept in the block buffer, 1 to 3 threads,
+// whose shares split into blocks and vector remainders differently.
+template <class S, G2PWhat What, class Eos, class Strength>
+void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
+  const GridGeom g = make_geom(false);
+  // every thread count splits these into several blocks and a partial one
+  Particles P = random_particles(g, 6 * kGatherBlock + 1001, 23);
+  if (energy) {
+    for (auto f : {&Particles::e, &Particles::epsp, &Particles::q}) Particles::enable(P.*f, P.size(), true);
+    for (std::size_t i = 0; i < P.size(); ++i) P.e[i] = 1e3 * (1 + i % 7);
+  }
+  // volumes that the update makes non-positive (V <= 0 stays so): the lowest index is reported
+  P.V[2100] = -1e-5;
+  P.V[1700] = -1e-5;
+  Bins b = bin(g, P);
+  Grid grid(g, true);
+  auto G = grid.view();
+  {
+    auto pv = P.view();
+    clear_grid(g, g.all_nodes(), G, true);
+    p2g_colored<S, What == G2PWhat::Full, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
+    GridUpdateParams q;
+    q.dt = 1e-4;
+    grid_update(g, g.all_nodes(), G, q, nullptr);
+  }
+  const G2PParams gq{1e-4, 0.25, 0.0};
+  ConstitutiveParams cq;
+  cq.dt = 1e-4;
+  cq.av_length = g.h;
+  cq.av_linear = 0.2;
+  cq.av_quadratic = 2.0;
+  auto state = [](Particles& Q) {
+    auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+    return ConstitutiveState{opt(Q.e), opt(Q.epsp), opt(Q.q), nullptr};
+  };
+  constexpr bool APIC = What == G2PWhat::Full;
+  Particles R = P;  // reference: the unfused passes
+  auto rv = R.view();
+  g2p<S, false, What>(g, G, rv, R.size(), gq);
+  const auto ref = constitutive_update(rv, state(R), R.size(), cq, eos, str);
+  REQUIRE(ref.bad == 1700);
+  const int threads0 = omp_get_max_threads();
+  for (int threads : {1, 2, 3}) {
+    for (bool store : {true, false}) {
+      INFO("threads " << threads << ", store L " << store);
+      omp_set_num_threads(threads);
+      Particles F = P;
+      auto fv = F.view();
+      const auto st = state(F);
+      auto after = [&](std::size_t first, std::size_t last, const Gradient& L, ConstitutiveResult& acc) {
+        acc.merge(constitutive_block(fv, st, L, first, last, cq, eos, str));
+      };
+      std::vector<double> scratch(kGatherScratch * static_cast<std::size_t>(threads), std::nan(""));
+      const auto r = g2p_blocks<S, false, What, false, false, ConstitutiveResult>(g, G, fv, F.size(), gq,
+                                                                                 store ? nullptr : scratch.data(), after);
+      REQUIRE(r.bad == ref.bad);
+      REQUIRE(r.max_speed == ref.max_speed);
+      for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::V, &Particles::sxx,
+                     &Particles::syy, &Particles::sxy, &Particles::p, &Particles::e, &Particles::epsp, &Particles::q})
+        REQUIRE(F.*f == R.*f);
+      if constexpr (APIC)
+        for (auto f : {&Particles::Cxx, &Particles::Cxy, &Particles::Cyx, &Particles::Cyy}) REQUIRE(F.*f == R.*f);
+      for (auto f : {&Particles::Lxx, &Particles::Lxy, &Particles::Lyx, &Particles::Lyy})
+        REQUIRE(F.*f == (store ? R.*f : P.*f));  // not stored: the arrays keep what they held
+    }
+  }
+  omp_set_num_threads(threads0);
+}
+
+}  // namespace
+
+TEST_CASE("last gather pass with the constitutive update block by block: bitwise the separate passes",
+          "[transfer][constitutive]") {
+  SECTION("USL, APIC, quadratic B-spline, Mie-Grueneisen + J2 + energy + viscosity") {
+    check_fused_pass<QuadraticBSpline, G2PWhat::Full>(MieGruneisenEos::make(2700.0, 5350.0, 1.34, 2.0),
+                                                      VonMisesStrength{26e9, 1e8, 1e8}, true);
+  }
+  SECTION("MUSL position pass, linear hat, linear elastic") {
+    check_fused_pass<Linear, G2PWhat::PositionGradient>(LinearEos{1000.0, 1e6}, ElasticStrength{4e5}, false);
+  }
 }
