@@ -91,9 +91,10 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
     if phase == "contact":
         return npp * 2 * (8 * 8 + 4 * 16), npp * 60
     if phase == "g2p":
-        # reads x, y; writes x, y, v, L, C; heat: reads v, C, e too, and the scatter velocity
-        # (px, py hold p / m after the grid update)
-        b = 2 * 16 + 2 * (8 if (heat or flip) else 16) + 8 * 2 * 4  # x y rw, v, L (write-allocate)
+        # reads x, y; writes x, y, v, C; heat: reads v, C, e too, and the scatter velocity
+        # (px, py hold p / m after the grid update). L stays in the gather's block buffer
+        # (kern::g2p_blocks; stored on the particles only for the steps the statistics read)
+        b = 2 * 16 + 2 * (8 if (heat or flip) else 16)  # x y rw, v
         b += rw("Cxx", "Cxy", "Cyx", "Cyy") if heat else 16 * 4 * apic
         if heat:
             b += rw("e")
@@ -107,14 +108,16 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
         if cfg.get("scheme") == "musl":
             # MUSL: the velocity gather above, then a momentum remap (scatter of m v: reads x, y,
             # vx, vy, m, order; clears and adds px, py), grid velocity (reads m, px, py, writes
-            # vx, vy), and a second gather for position and L (reads x, y, grid v; writes x, y, L)
+            # vx, vy), and a second gather for position and L (reads x, y, grid v; writes x, y;
+            # L into the block buffer)
             b += 4 + 40 + npp * (2 * 8 + 2 * 16) + npp * (3 * 8 + 2 * 16)
-            b += 2 * 16 + 8 * 2 * 4 + npp * 8 * 2
+            b += 2 * 16 + npp * 8 * 2
             flops += 2 * ev + nodes * (1 + 4) + npp * 8 + nodes * (1 + 4 + 8)
         return b, flops
     if phase == "constitutive":
-        # L (4) read, V rw, m read, stress (3) rw, p rw, v read, optional e, epsp, wp rw, q write
-        b = rd("Lxx", "Lxy", "Lyx", "Lyy", "m", "vx", "vy") + rw("V", "sxx", "syy", "sxy", "p", "e", "epsp", "wp")
+        # V rw, m read, stress (3) rw, p rw, v read, optional e, epsp, wp rw, q write; L from the
+        # gather's block buffer (in L2: not counted)
+        b = rd("m", "vx", "vy") + rw("V", "sxx", "syy", "sxy", "p", "e", "epsp", "wp")
         b += rw("q")
         flops = 60  # Jaumann trial, volume, rho, signal speed (one sqrt), max
         if "epsp" in has:
