@@ -21,6 +21,7 @@ and prints the tables. Builds build/ (Release) first unless --no-build.
 import argparse
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -227,6 +228,32 @@ def tables(results, roof):
     return "\n".join(lines)
 
 
+def measure(a, build, threads, work, results):
+    """Runs every scene, size and thread count of the arguments; appends each run.json."""
+    for scene in a.scenes.split(","):
+        if scene not in SCENES:
+            sys.exit(f"--scenes: unknown scene '{scene}' (allowed: {', '.join(SCENES)})")
+        key, sizes = SCENES[scene]
+        for size in a.sizes.split(","):
+            if size not in sizes:
+                sys.exit(f"--sizes: unknown size '{size}' (allowed: {', '.join(sizes)})")
+            value = sizes[size]
+            for t in threads:
+                # particles from the first run; steps from the budget
+                n_est = float(size)
+                steps = int(min(300, max(20, a.particle_steps / n_est)))
+                print(f"== {scene} {size} ({key}={value}), {t} thread(s), {steps} steps", file=sys.stderr, flush=True)
+                r = run_one(build / "shockmpm", scene, key, value, steps, t, work)
+                if r["status"] != "completed":
+                    sys.exit(f"{scene} {size}: run {r['status']}: {r['message']}")
+                if not a.keep:
+                    shutil.rmtree(Path(work) / f"{scene}-{value}-t{t}")
+                r.update(scene=scene, size=size, solver=solver_cfg(r))
+                print(f"   {r['particles']:,} particles, {r['particle_steps_per_s'] * 1e-6:.2f} M particle-steps/s",
+                      file=sys.stderr, flush=True)
+                results.append(r)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scenes", default=",".join(SCENES), help="comma-separated, from " + ", ".join(SCENES))
@@ -256,27 +283,19 @@ def main():
     threads = [int(t) for t in a.threads.split(",")]
     roof = {t: roofs(build, t) for t in threads}
     results = []
+    # each run's output goes once its run.json is read (a 4e6 run writes about 1 GB of
+    # snapshots), unless --keep; after a failure the runs so far stay for inspection
     work = a.keep or tempfile.mkdtemp(prefix="smpm-throughput-")
-    for scene in a.scenes.split(","):
-        if scene not in SCENES:
-            sys.exit(f"--scenes: unknown scene '{scene}' (allowed: {', '.join(SCENES)})")
-        key, sizes = SCENES[scene]
-        for size in a.sizes.split(","):
-            if size not in sizes:
-                sys.exit(f"--sizes: unknown size '{size}' (allowed: {', '.join(sizes)})")
-            value = sizes[size]
-            for t in threads:
-                # particles from the first run; steps from the budget
-                n_est = float(size)
-                steps = int(min(300, max(20, a.particle_steps / n_est)))
-                print(f"== {scene} {size} ({key}={value}), {t} thread(s), {steps} steps", file=sys.stderr, flush=True)
-                r = run_one(build / "shockmpm", scene, key, value, steps, t, work)
-                if r["status"] != "completed":
-                    sys.exit(f"{scene} {size}: run {r['status']}: {r['message']}")
-                r.update(scene=scene, size=size, solver=solver_cfg(r))
-                print(f"   {r['particles']:,} particles, {r['particle_steps_per_s'] * 1e-6:.2f} M particle-steps/s",
-                      file=sys.stderr, flush=True)
-                results.append(r)
+    done = False
+    try:
+        measure(a, build, threads, work, results)
+        done = True
+    finally:
+        if not a.keep:
+            if done:
+                shutil.rmtree(work, ignore_errors=True)
+            else:
+                print(f"(the runs so far are kept in {work})", file=sys.stderr)
     text = tables(results, roof)
     stamp = time.strftime("%Y%m%d-%H%M%S")
     outdir = ROOT / "bench" / "results"
