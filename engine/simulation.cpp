@@ -269,7 +269,7 @@ void Simulation::gather_from_grid() {
   const int threads = omp_get_max_threads();
   if (!store_gradient_ && gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
     gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
-  double* const keep = store_gradient_ ? nullptr : gather_scratch_.data();
+  double* const L_buffer = store_gradient_ ? nullptr : gather_scratch_.data();
   using Result = kern::ConstitutiveResult;
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
@@ -278,9 +278,9 @@ void Simulation::gather_from_grid() {
     if (cfg_.scheme == Scheme::USL) {
       auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
         constexpr bool C = decltype(contact)::value;
-        if (flip) r = kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, keep, stress);
-        else if (heat) r = kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, keep, stress);
-        else r = kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, keep, stress);
+        if (flip) r = kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, stress);
+        else if (heat) r = kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, stress);
+        else r = kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, stress);
       };
       if (cfg_.contact) usl(std::true_type{});
       else usl(std::false_type{});
@@ -303,7 +303,7 @@ void Simulation::gather_from_grid() {
     kern::grid_velocity_from_momentum(g, box_, G, gq);
     double* vel[] = {G.vx, G.vy};
     kern::fill_periodic_ghosts(g, box_, vel, 2);
-    r = kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, keep, stress);
+    r = kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, L_buffer, stress);
   });
   times_.constitutive += stress_seconds;
   times_.g2p += omp_get_wtime() - t_start - stress_seconds;

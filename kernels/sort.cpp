@@ -45,8 +45,8 @@ void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, s
     const int T = omp_get_num_threads();
     const int t = omp_get_thread_num();
     // contiguous particle chunk and key block of this thread
-    const std::size_t i0 = n * t / T, i1 = n * (t + 1) / T;
-    const std::size_t k0 = nkeys * t / T, k1 = nkeys * (t + 1) / T;
+    const auto [i0, i1] = thread_share(n);
+    const auto [k0, k1] = thread_share(nkeys);
     std::uint32_t kmin = ~0u, kmax = 0;
 #pragma omp simd reduction(min : kmin) reduction(max : kmax)
     for (std::size_t i = i0; i < i1; ++i) {
