@@ -5,7 +5,12 @@
 // measure the drift as much as the scaling; interleaved rounds cancel it.
 //
 //   bench_scaling CASE [--set section.key=value ...] [--threads 1,2] [--rounds 10]
-//                 [--steps-per-round 5] [--warmup 10]
+//                 [--steps-per-round 5] [--warmup 10] [--verify-steps 0]
+//
+// --verify-steps K: before the timing, one fresh simulation per thread count runs K steps from
+// the initial state, and a hash of its particle state (every array, bitwise) is printed per
+// thread count: the results must be identical for every count ("bitwise: identical" or
+// "bitwise: DIFFER", exit 1).
 //
 // Prints, per phase and for the whole step, the median over rounds of the time per
 // particle-step for each thread count, and the median over rounds of the per-round ratio
@@ -26,6 +31,7 @@
 #include <algorithm>
 #include <cmath>
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -86,7 +92,7 @@ struct Triad {
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
                "error: %s\nusage: bench_scaling CASE [--set section.key=value ...] [--threads 1,2] "
-               "[--rounds N>=1] [--steps-per-round K>=1] [--warmup W>=0]\n",
+               "[--rounds N>=1] [--steps-per-round K>=1] [--warmup W>=0] [--verify-steps K>=0]\n",
                why.c_str());
   std::exit(2);
 }
@@ -99,13 +105,45 @@ long positive(const std::string& key, const std::string& v, long lo) {
   return x;
 }
 
+// FNV-1a over the bytes of every particle array: equal hashes, bitwise-equal state.
+std::uint64_t state_hash(const smpm::Particles& P) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto add = [&](const void* data, std::size_t bytes) {
+    const auto* b = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  for (const auto* a : {&P.x, &P.y, &P.vx, &P.vy, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy,
+                        &P.e, &P.epsp, &P.q})
+    add(a->data(), a->size() * sizeof(double));
+  add(P.id.data(), P.id.size() * sizeof(P.id[0]));
+  return h;
+}
+
+// One fresh simulation per thread count, `steps` steps each: prints each state's hash, true when
+// all are equal.
+bool same_state_for(const std::vector<int>& threads, const smpm::Scene& scene, long steps) {
+  std::vector<std::uint64_t> hashes;
+  for (int t : threads) {
+    omp_set_num_threads(t);
+    smpm::Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, scene.particles);
+    sim.store_gradient(false);
+    for (long s = 0; s < steps; ++s) sim.step();
+    hashes.push_back(state_hash(sim.particles()));
+    std::printf("# state after %ld steps with %2d threads: %016llx\n", steps, t,
+                static_cast<unsigned long long>(hashes.back()));
+  }
+  const bool same = std::all_of(hashes.begin(), hashes.end(), [&](auto x) { return x == hashes[0]; });
+  std::printf("# bitwise: %s\n", same ? "identical" : "DIFFER");
+  return same;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string case_file;
   std::vector<std::string> sets;
   std::vector<int> threads{1, 2};
-  long rounds = 10, per_round = 5, warmup = 10;
+  long rounds = 10, per_round = 5, warmup = 10, verify_steps = 0;
   for (int a = 1; a < argc; ++a) {
     const std::string s = argv[a];
     auto value = [&]() -> std::string {
@@ -116,6 +154,7 @@ int main(int argc, char** argv) {
     else if (s == "--rounds") rounds = positive(s, value(), 1);
     else if (s == "--steps-per-round") per_round = positive(s, value(), 1);
     else if (s == "--warmup") warmup = positive(s, value(), 0);
+    else if (s == "--verify-steps") verify_steps = positive(s, value(), 0);
     else if (s == "--threads") {
       threads.clear();
       std::stringstream ss(value());
@@ -133,6 +172,7 @@ int main(int argc, char** argv) {
     const std::filesystem::path path(case_file);
     smpm::Scene scene = smpm::build_scene(doc, path.stem().string(), path.parent_path());
     const int max_threads = *std::max_element(threads.begin(), threads.end());
+    if (verify_steps > 0 && !same_state_for(threads, scene, verify_steps)) return 1;
     omp_set_num_threads(max_threads);  // the sort's per-thread histograms are sized at construction
     smpm::Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material,
                          std::move(scene.particles));

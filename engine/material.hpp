@@ -66,19 +66,43 @@ inline const std::vector<std::string>& strength_names() {
   return v;
 }
 
+// Calls f(eos, strength_part) with the strength part of `mat`.
+template <class Eos, class F>
+decltype(auto) with_strength(const Material& mat, const Eos& eos, F&& f) {
+  switch (mat.strength) {
+    case StrengthKind::None: return f(eos, kern::NoStrength{});
+    case StrengthKind::Elastic: return f(eos, kern::ElasticStrength{mat.shear_modulus()});
+    case StrengthKind::VonMises: break;
+  }
+  return f(eos, kern::VonMisesStrength{mat.shear_modulus(), mat.Y0, mat.H});
+}
+
 // Calls f(eos_part, strength_part) with the parts of `mat`.
 template <class F>
 decltype(auto) with_material(const Material& mat, F&& f) {
-  auto with_strength = [&](const auto& eos) -> decltype(auto) {
-    switch (mat.strength) {
-      case StrengthKind::None: return f(eos, kern::NoStrength{});
-      case StrengthKind::Elastic: return f(eos, kern::ElasticStrength{mat.shear_modulus()});
-      case StrengthKind::VonMises: break;
-    }
-    return f(eos, kern::VonMisesStrength{mat.shear_modulus(), mat.Y0, mat.H});
-  };
-  if (mat.eos == EosKind::MieGruneisen) return with_strength(mat.mie_gruneisen());
-  return with_strength(kern::LinearEos{mat.rho0, mat.bulk_modulus()});
+  if (mat.eos == EosKind::MieGruneisen) return with_strength(mat, mat.mie_gruneisen(), f);
+  return with_strength(mat, kern::LinearEos{mat.rho0, mat.bulk_modulus()}, f);
+}
+
+// kern::constitutive_block with the parts of `mat`: the constitutive update of points
+// [first, last). Compiled once per EOS part (engine/constitutive_linear.cpp,
+// engine/constitutive_mie_gruneisen.cpp), apart from the engine's other code, so that the
+// vectorized loops of every combination build in parallel and an edit elsewhere does not
+// rebuild them.
+kern::ConstitutiveResult constitutive_linear(const Material& mat, const kern::ParticleView& P,
+                                             const kern::ConstitutiveState& S, const kern::Gradient& L,
+                                             std::size_t first, std::size_t last, const kern::ConstitutiveParams& q,
+                                             kern::Selection sel);
+kern::ConstitutiveResult constitutive_mie_gruneisen(const Material& mat, const kern::ParticleView& P,
+                                                    const kern::ConstitutiveState& S, const kern::Gradient& L,
+                                                    std::size_t first, std::size_t last,
+                                                    const kern::ConstitutiveParams& q, kern::Selection sel);
+inline kern::ConstitutiveResult constitutive_block(const Material& mat, const kern::ParticleView& P,
+                                                   const kern::ConstitutiveState& S, const kern::Gradient& L,
+                                                   std::size_t first, std::size_t last,
+                                                   const kern::ConstitutiveParams& q, kern::Selection sel) {
+  return mat.eos == EosKind::MieGruneisen ? constitutive_mie_gruneisen(mat, P, S, L, first, last, q, sel)
+                                          : constitutive_linear(mat, P, S, L, first, last, q, sel);
 }
 
 }  // namespace smpm

@@ -11,6 +11,7 @@
 #include "engine/timer.hpp"
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
+#include "engine/transfer_step.hpp"
 #include "kernels/transfer.hpp"
 
 namespace smpm {
@@ -144,30 +145,18 @@ void Simulation::bin_particles() {
   }
 }
 
+transfer::StepArgs Simulation::transfer_args() {
+  return {grid_.geom, grid_.view(), pview(), P_.size(), order_.data(), cell_start_.data(), box_, cfg_, transfer_heat()};
+}
+
 void Simulation::scatter_to_grid() {
   Timed t(times_.p2g);
-  const auto& g = grid_.geom;
-  auto G = grid_.view();
-  const auto pv = pview();
-  kern::clear_grid(g, box_, G, true);
-  kern::with_shape(cfg_.shape, [&](auto shape) {
-    using S = decltype(shape);
-    using kern::P2GWhat;
-    const std::uint32_t* o = order_.data();
-    const std::uint32_t* c = cell_start_.data();
-    const bool apic = cfg_.transfer == Transfer::APIC;
-    if (cfg_.contact) {
-      if (apic) kern::p2g_colored<S, true, P2GWhat::All, true>(g, G, pv, o, c, cfg_.ugimp_lp);
-      else kern::p2g_colored<S, false, P2GWhat::All, true>(g, G, pv, o, c, cfg_.ugimp_lp);
-    } else {
-      if (apic) kern::p2g_colored<S, true, P2GWhat::All>(g, G, pv, o, c, cfg_.ugimp_lp);
-      else kern::p2g_colored<S, false, P2GWhat::All>(g, G, pv, o, c, cfg_.ugimp_lp);
-    }
-  });
-  for (int f = 0; f < G.fields; ++f) {
-    const auto F = G.field(f);
+  const auto a = transfer_args();
+  kern::with_shape(cfg_.shape, [&](auto shape) { transfer::scatter<decltype(shape)>(a); });
+  for (int f = 0; f < a.G.fields; ++f) {
+    const auto F = a.G.field(f);
     double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.gmx, F.gmy, F.vol};
-    kern::fold_periodic(g, box_, arrays, cfg_.contact ? 8 : 5);
+    kern::fold_periodic(a.g, box_, arrays, cfg_.contact ? 8 : 5);
   }
 }
 
@@ -240,9 +229,7 @@ auto Simulation::stress_pass(double& thread0_seconds) {
     const double t0 = timed ? omp_get_wtime() : 0.0;
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
-      acc.merge(with_material(materials_[k], [&](const auto& eos, const auto& str) {
-        return kern::constitutive_block(pv, state, L, first, last, params[k], eos, str, sel);
-      }));
+      acc.merge(constitutive_block(materials_[k], pv, state, L, first, last, params[k], sel));
     }
     if (timed) thread0_seconds += omp_get_wtime() - t0;
   };
@@ -252,11 +239,8 @@ void Simulation::gather_from_grid() {
   const double t_start = omp_get_wtime();
   double stress_seconds = 0.0;
   const auto stress = stress_pass(stress_seconds);
-  kern::ConstitutiveResult r;
-  const auto& g = grid_.geom;
-  auto G = grid_.view();
-  const auto pv = pview();
-  const std::size_t n = P_.size();
+  const auto a = transfer_args();
+  const auto& g = a.g;
   kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha};
   // walls: the largest double below the far edge keeps a clamped point inside the grid
   using kern::Wall;
@@ -264,47 +248,14 @@ void Simulation::gather_from_grid() {
   if (cfg_.walls.right != Wall::None) q.xmax = std::nextafter(g.x0 + g.length_x(), g.x0);
   if (cfg_.walls.bottom != Wall::None) q.ymin = g.y0;
   if (cfg_.walls.top != Wall::None) q.ymax = std::nextafter(g.y0 + g.length_y(), g.y0);
-  const bool flip = cfg_.transfer == Transfer::FLIP;
   // L of each block in a per-thread buffer, unless asked to store it on the particles
   const int threads = omp_get_max_threads();
   if (!store_gradient_ && gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
     gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
   double* const L_buffer = store_gradient_ ? nullptr : gather_scratch_.data();
-  using Result = kern::ConstitutiveResult;
-  kern::with_shape(cfg_.shape, [&](auto shape) {
-    using S = decltype(shape);
-    using kern::G2PWhat;
-    const bool heat = transfer_heat();
-    if (cfg_.scheme == Scheme::USL) {
-      auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
-        constexpr bool C = decltype(contact)::value;
-        if (flip) r = kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, stress);
-        else if (heat) r = kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, stress);
-        else r = kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, stress);
-      };
-      if (cfg_.contact) usl(std::true_type{});
-      else usl(std::false_type{});
-      return;
-    }
-    // MUSL: new particle velocities, remap their momentum to the grid, then move the
-    // particles and take the velocity gradient from the remapped grid velocity.
-    if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
-    else if (heat) kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);
-    else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
-    kern::clear_grid(g, box_, G, false);
-    if (cfg_.transfer == Transfer::APIC)
-      kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
-    else
-      kern::p2g_colored<S, false, kern::P2GWhat::Momentum>(g, G, pv, order_.data(), cell_start_.data(), q.lp);
-    double* mom[] = {G.px, G.py};
-    kern::fold_periodic(g, box_, mom, 2);
-    kern::GridUpdateParams gq;
-    gq.walls = cfg_.walls;
-    kern::grid_velocity_from_momentum(g, box_, G, gq);
-    double* vel[] = {G.vx, G.vy};
-    kern::fill_periodic_ghosts(g, box_, vel, 2);
-    r = kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, L_buffer, stress);
-  });
+  const auto update = transfer::BlockUpdate::of(stress);
+  const kern::ConstitutiveResult r = kern::with_shape(
+      cfg_.shape, [&](auto shape) { return transfer::gather<decltype(shape)>(a, q, L_buffer, update); });
   times_.constitutive += stress_seconds;
   times_.g2p += omp_get_wtime() - t_start - stress_seconds;
   if (store_gradient_) gradient_step_ = steps_ + 1;

@@ -16,6 +16,9 @@
 #include "kernels/shape.hpp"
 
 namespace smpm {
+namespace transfer {
+struct StepArgs;
+}
 
 enum class Transfer { APIC, FLIP };
 // USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
@@ -123,6 +126,7 @@ class Simulation {
 
   void check_volume(std::ptrdiff_t bad) const;
   kern::ParticleView pview();  // particle view, with velocity fields when contact is on
+  transfer::StepArgs transfer_args();  // what the transfers read (engine/transfer_step.hpp)
   // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
   // (see kern::g2p_particle), so total energy is conserved by the transfers.
   bool transfer_heat() const { return cfg_.transfer == Transfer::APIC && !P_.e.empty(); }

@@ -24,6 +24,7 @@ namespace smpm::kern {
 
 // Linear: P = K (rho / rho0 - 1), no energy dependence.
 struct LinearEos {
+  static constexpr bool needs_energy = false;
   double rho0 = 1.0, K = 1.0;
   SMPM_INLINE double cold(double rho) const { return K * (rho / rho0 - 1.0); }
   double gamma_rho() const { return 0.0; }
@@ -37,6 +38,7 @@ struct LinearEos {
 //   tension      P = C mu + Gamma rho e
 // C = rho0 c0^2, D = C (2 s - 1), S = C (s - 1)(3 s - 1), Gamma = gamma0 rho0 / rho.
 struct MieGruneisenEos {
+  static constexpr bool needs_energy = true;  // P depends on e: the state must carry e
   double rho0 = 1.0, C = 1.0, D = 0.0, S = 0.0, gamma0 = 0.0;
   static MieGruneisenEos make(double rho0, double c0, double s, double gamma0) {
     const double C = rho0 * c0 * c0;
@@ -295,21 +297,29 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
 // The constitutive update of points [first, last) on the calling thread, L as above (the
 // particles' arrays at first, or a block buffer of kern::g2p_blocks): the optional state
 // (energy, viscosity, plastic work, selection) chosen at run time, each combination its own loop.
+// Only the combinations that can occur are compiled (each is a vectorized loop, and they were
+// most of the engine's compile time): an EOS that needs energy always has it (S.e is required
+// for it), and plastic work is tracked only by a plastic strength part (a strength part without
+// plastic work would add zero to it).
 template <class Eos, class Strength>
 ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
                                       std::size_t first, std::size_t last, const ConstitutiveParams& q,
                                       const Eos& eos, const Strength& str, Selection sel = {}) {
-  const bool e = S.e != nullptr, qv = S.q != nullptr, wp = S.wp != nullptr, selective = sel.select != nullptr;
+  const bool qv = S.q != nullptr, wp = S.wp != nullptr, selective = sel.select != nullptr;
   using T = std::true_type;
   using F = std::false_type;
   auto run = [&](auto Sel, auto E, auto Q) {
     constexpr bool s_ = decltype(Sel)::value, e_ = decltype(E)::value, q_ = decltype(Q)::value;
-    return wp ? constitutive_range<s_, e_, q_, true>(P, S, L, first, last, q, eos, str, sel)
-              : constitutive_range<s_, e_, q_, false>(P, S, L, first, last, q, eos, str, sel);
+    if constexpr (Strength::plastic) {
+      if (wp) return constitutive_range<s_, e_, q_, true>(P, S, L, first, last, q, eos, str, sel);
+    }
+    return constitutive_range<s_, e_, q_, false>(P, S, L, first, last, q, eos, str, sel);
   };
   auto by_state = [&](auto Sel) {
-    if (e) return qv ? run(Sel, T{}, T{}) : run(Sel, T{}, F{});
-    return qv ? run(Sel, F{}, T{}) : run(Sel, F{}, F{});
+    if constexpr (!Eos::needs_energy) {
+      if (S.e == nullptr) return qv ? run(Sel, F{}, T{}) : run(Sel, F{}, F{});
+    }
+    return qv ? run(Sel, T{}, T{}) : run(Sel, T{}, F{});
   };
   return selective ? by_state(T{}) : by_state(F{});
 }

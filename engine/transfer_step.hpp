@@ -1,0 +1,55 @@
+// The transfers of one step (P2G scatter; G2P gather with the constitutive update behind it),
+// for one shape function each. Simulation calls them through kern::with_shape. Each shape's
+// transfers are compiled in a translation unit of their own (engine/transfer_<shape>.cpp): the
+// variants (transfer, scheme, contact, heating) are many vectorized loops per shape, and in one
+// file they were most of the engine's compile time.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "engine/simulation.hpp"
+#include "kernels/constitutive.hpp"
+#include "kernels/transfer.hpp"
+
+namespace smpm::transfer {
+
+// What the transfers of a step read: the grid, the particles and their binning, the settings.
+struct StepArgs {
+  const kern::GridGeom& g;
+  kern::GridView G;
+  kern::ParticleView P;  // with velocity fields when contact is on (Simulation::pview)
+  std::size_t n;
+  const std::uint32_t* order;
+  const std::uint32_t* cell_start;
+  kern::NodeBox box;
+  const SolverConfig& cfg;
+  bool heat;  // APIC with an energy field: the gather heats the particles (Simulation::transfer_heat)
+};
+
+// The constitutive update of a block of points [first, last) with their gradient L, which the
+// last gather pass calls behind each block (kern::g2p_blocks): a reference to the engine's
+// callable, one indirect call per block of kern::kGatherBlock points.
+struct BlockUpdate {
+  const void* ctx;
+  void (*fn)(const void*, std::size_t, std::size_t, const kern::Gradient&, kern::ConstitutiveResult&);
+  template <class F>
+  static BlockUpdate of(const F& f) {
+    return {&f, [](const void* c, std::size_t first, std::size_t last, const kern::Gradient& L,
+                   kern::ConstitutiveResult& acc) { (*static_cast<const F*>(c))(first, last, L, acc); }};
+  }
+  void operator()(std::size_t first, std::size_t last, const kern::Gradient& L, kern::ConstitutiveResult& acc) const {
+    fn(ctx, first, last, L, acc);
+  }
+};
+
+// P2G: mass, momentum, internal force (and the contact fields), colored and atomic-free. The
+// grid inside the box is cleared first; the periodic fold is the caller's.
+template <class Shape>
+void scatter(const StepArgs& a);
+
+// G2P: USL's gather, or MUSL's velocity pass, momentum remap and position pass; the pass that
+// forms L calls `update` behind each block. L_buffer: see kern::g2p_blocks.
+template <class Shape>
+kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* L_buffer, BlockUpdate update);
+
+}  // namespace smpm::transfer

@@ -1,0 +1,68 @@
+// Definitions of engine/transfer_step.hpp, included by engine/transfer_<shape>.cpp only, each of
+// which instantiates them for its shape.
+#pragma once
+#include "engine/transfer_step.hpp"
+#include "kernels/grid_update.hpp"
+#include "kernels/transfer.hpp"
+
+namespace smpm::transfer {
+
+template <class S>
+void scatter(const StepArgs& a) {
+  using kern::P2GWhat;
+  kern::clear_grid(a.g, a.box, a.G, true);
+  const bool apic = a.cfg.transfer == Transfer::APIC;
+  const double lp = a.cfg.ugimp_lp;
+  if (a.cfg.contact) {
+    if (apic) kern::p2g_colored<S, true, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+    else kern::p2g_colored<S, false, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+  } else {
+    if (apic) kern::p2g_colored<S, true, P2GWhat::All>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+    else kern::p2g_colored<S, false, P2GWhat::All>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+  }
+}
+
+template <class S>
+kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* L_buffer, BlockUpdate update) {
+  using kern::G2PWhat;
+  using Result = kern::ConstitutiveResult;
+  const auto& g = a.g;
+  const auto& G = a.G;
+  const auto& pv = a.P;
+  const std::size_t n = a.n;
+  const bool flip = a.cfg.transfer == Transfer::FLIP;
+  if (a.cfg.scheme == Scheme::USL) {
+    auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
+      constexpr bool C = decltype(contact)::value;
+      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
+      if (a.heat) return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
+      return kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
+    };
+    return a.cfg.contact ? usl(std::true_type{}) : usl(std::false_type{});
+  }
+  // MUSL: new particle velocities, remap their momentum to the grid, then move the particles
+  // and take the velocity gradient from the remapped grid velocity.
+  if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
+  else if (a.heat) kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);
+  else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
+  kern::clear_grid(g, a.box, G, false);
+  if (a.cfg.transfer == Transfer::APIC)
+    kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, a.order, a.cell_start, q.lp);
+  else
+    kern::p2g_colored<S, false, kern::P2GWhat::Momentum>(g, G, pv, a.order, a.cell_start, q.lp);
+  double* mom[] = {G.px, G.py};
+  kern::fold_periodic(g, a.box, mom, 2);
+  kern::GridUpdateParams gq;
+  gq.walls = a.cfg.walls;
+  kern::grid_velocity_from_momentum(g, a.box, G, gq);
+  double* vel[] = {G.vx, G.vy};
+  kern::fill_periodic_ghosts(g, a.box, vel, 2);
+  return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, L_buffer, update);
+}
+
+}  // namespace smpm::transfer
+
+// One shape's instantiation, inside namespace smpm::transfer: SMPM_TRANSFER_INSTANTIATE(kern::Linear).
+#define SMPM_TRANSFER_INSTANTIATE(SHAPE)        \
+  template void scatter<SHAPE>(const StepArgs&); \
+  template kern::ConstitutiveResult gather<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, BlockUpdate);
