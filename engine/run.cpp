@@ -269,6 +269,15 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   };
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads);
+  if (!opt.quiet) {
+    const double dt0 = sim.stable_dt();
+    std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
+                "(dt %.3g ns at t = 0), %d threads, results in %s\n",
+                scene.name.c_str(), sim.particles().size(), scene.geom.nx, scene.geom.ny, scene.geom.h * 1e6,
+                scene.run.end_time * 1e9, std::ceil(scene.run.end_time / dt0), dt0 * 1e9, threads,
+                out.string().c_str());
+    std::fflush(stdout);
+  }
   std::signal(SIGINT, on_sigint);
   g_interrupted = false;
 

@@ -91,7 +91,7 @@ void check_sort(const GridGeom& g, const Particles& P) {
   const int threads0 = omp_get_max_threads();
   omp_set_num_threads(1);
   Bins b1 = bin(g, P);
-  for (int T : {2, 3, std::max(2, threads0)}) {
+  for (int T : {2, 3, 8, 16, std::max(2, threads0)}) {  // 8, 16: key blocks met by few of many threads
     omp_set_num_threads(T);
     Bins b2 = bin(g, P);
     REQUIRE(b1.order == b2.order);
