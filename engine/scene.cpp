@@ -1,5 +1,6 @@
 #include "engine/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <tuple>
@@ -203,6 +204,14 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
     r.finish();
   }
+  // [figures]: colour ranges of the maps that scripts/figures.py draws (the resolved case
+  // carries them to run.json); absent: from the data (1st-99th percentile of the snapshot)
+  {
+    CaseReader r = top.table("figures");
+    if (r.has("p_range")) r.pair("p_range", kStress, true);
+    if (r.has("t_range")) r.pair("t_range", kTemperature, true);
+    r.finish();
+  }
   // [contact]
   {
     CaseReader r = top.table("contact");
@@ -391,8 +400,12 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
   {
     auto regions = top.tables("regions");
     if (regions.empty()) {
+      // the study's bands, for a target reaching 1000 um above the impact plane or more; a
+      // shorter target gets the same bands scaled by its height / 1000 um, so that they stay
+      // inside it and apart (a 400 um target: I 40-360, II 40-240, III 40-120 um)
+      const double f = std::clamp(s.bodies[s.target].y1 / 1000e-6, 1e-6, 1.0);
       for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
-        s.regions.push_back({name, a, b, static_cast<std::uint8_t>(s.target)});
+        s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target)});
     }
     for (auto& r : regions) {
       Region g;

@@ -22,9 +22,13 @@ written go to stdout. Exit status: 0 when at least one figure was written, 1 whe
 made, 2 on bad arguments.
 
 Only the snapshot files named in fields/particles.xdmf are read (the directory may hold stale
-snapshots of earlier runs). Regions come from run.json case_resolved.regions, else the study's
-defaults: I 100-900 um, II 100-600 um, III 100-300 um of the target, y measured from the impact
-plane y = 0 in the deformed configuration (as the engine's series.csv).
+snapshots of earlier runs). Regions are those the engine used (run.json regions; its defaults
+are the study's I 100-900 um, II 100-600 um, III 100-300 um of the target, scaled by the
+target's height / 1000 um for a shorter target), else the case's, else the study's; y measured
+from the impact plane y = 0 in the deformed configuration (as the engine's series.csv).
+Map colour ranges: --p-range / --t-range, else the case's [figures] p_range / t_range, else the
+1st-99th percentile of the shown snapshot (--ranges study: the study's 0-50 GPa and 300-500 K). Maps are drawn as images of pixels
+one point spacing wide (the mean of the points in each), which shows no moire.
 """
 import argparse
 import csv
@@ -187,9 +191,26 @@ class Run:
             parts.append(f"v = {math.hypot(*[to_float(x) for x in v[:2]]):.0f} m/s")
         return ", ".join(parts)
 
+    def case_range(self, key):
+        """Colour range of map `key` ("P" [GPa] or "T" [K]) set by the case's [figures], or None."""
+        fig = self.case.get("figures")
+        if not isinstance(fig, dict):
+            return None
+        names = {"P": (("p_range_GPa", 1.0), ("p_range_MPa", 1e-3), ("p_range_Pa", 1e-9)),
+                 "T": (("t_range_K", 1.0),)}[key]
+        for name, scale in names:
+            try:
+                lo, hi = (float(x) * scale for x in fig[name])
+                return (lo, hi) if lo < hi else None
+            except (KeyError, TypeError, ValueError):
+                continue
+        return None
+
     def regions(self):
-        """[(name, y0_um, y1_um, x_range_um or None)]."""
-        regs = self.case.get("regions")
+        """[(name, y0_um, y1_um, x_range_um or None)]: the regions the engine used (run.json
+        "regions"), else the case's, else the study's."""
+        regs = self.info.get("regions") if isinstance(self.info.get("regions"), list) else None
+        regs = regs or self.case.get("regions")
         out = []
         if isinstance(regs, list):
             for r in regs:
@@ -368,6 +389,56 @@ def fit_markers(fig, ax, coll, spacing_um, n_points):
     coll.set_sizes([max(d * d, 0.02)])
 
 
+STUDY_RANGES = {"P": (0.0, 50.0), "T": (300.0, 500.0)}  # the reference study's map colour ranges
+
+
+def data_range(values):
+    """Colour range from the data: the 1st to 99th percentile (a few hot spots or jets would
+    otherwise take the whole scale); a constant field gets a small range about its value."""
+    v = values[np.isfinite(values)]
+    if v.size == 0:
+        return (0.0, 1.0)
+    lo, hi = (float(q) for q in np.percentile(v, [1.0, 99.0]))
+    if not hi > lo:
+        pad = max(abs(lo) * 1e-3, 1e-9)
+        lo, hi = lo - pad, hi + pad
+    return (lo, hi)
+
+
+def pixel_map(ax, x, y, values, spacing_um, cmap, rng):
+    """Draws a field of the points as an image of pixels one point spacing wide: each pixel the
+    mean of the points in it, empty pixels (voids, outside) blank. Markers at one spacing drew
+    moire streaks where compacted material packs the points closer than their lattice."""
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    if not spacing_um:
+        spacing_um = math.sqrt(abs(x1 - x0) * abs(y1 - y0) / max(len(x), 1))
+    nx = max(1, min(4000, int(round(abs(x1 - x0) / spacing_um))))
+    ny = max(1, min(4000, int(round(abs(y1 - y0) / spacing_um))))
+    edges = (np.linspace(x0, x1, nx + 1), np.linspace(y0, y1, ny + 1))
+    ok = np.isfinite(values)
+    count, _, _ = np.histogram2d(x[ok], y[ok], bins=edges)
+    total, _, _ = np.histogram2d(x[ok], y[ok], bins=edges, weights=values[ok])
+    # A deformed lattice leaves some pixels of the material without a point and puts two in
+    # others: an empty pixel with at least 5 of its 8 neighbours filled is material, and gets
+    # their mean (twice). Voids and free space, many pixels wide, stay blank.
+    for _ in range(2):
+        cp, tp = np.pad(count, 1), np.pad(total, 1)
+        filled = sum((cp[1 + i:cp.shape[0] - 1 + i, 1 + j:cp.shape[1] - 1 + j] > 0).astype(int)
+                     for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
+        nsum = sum(tp[1 + i:tp.shape[0] - 1 + i, 1 + j:tp.shape[1] - 1 + j]
+                   for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
+        ncnt = sum(cp[1 + i:cp.shape[0] - 1 + i, 1 + j:cp.shape[1] - 1 + j]
+                   for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
+        hole = (count == 0) & (filled >= 5)
+        total = np.where(hole, nsum / np.maximum(ncnt, 1), total)
+        count = np.where(hole, 1.0, count)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    return ax.imshow(np.ma.masked_invalid(mean.T), origin="lower", extent=(x0, x1, y0, y1), cmap=cmap,
+                     vmin=rng[0], vmax=rng[1], interpolation="nearest", aspect="equal")
+
+
 # ----------------------------------------------------------------------------------------------
 # Figures of one directory
 
@@ -395,15 +466,16 @@ def fig_maps(run, a):
         ax.set_xlim(*xlim)
         ax.set_ylim(*ylim)
         ax.set_facecolor("white")
-        order = np.argsort(d[field])  # hottest / highest pressure drawn last
-        sc = ax.scatter(x[order], y[order], c=d[field][order] * scale, s=1, marker="s", linewidths=0,
-                        cmap=a.cmap, vmin=rng[0], vmax=rng[1], rasterized=True)
-        cb = fig.colorbar(sc, ax=ax, shrink=0.9, extend="both")
+        values = d[field] * scale
+        rng = rng or run.case_range(key) or (STUDY_RANGES[key] if a.ranges == "study" else data_range(values))
+        im = pixel_map(ax, x, y, values, run.spacing_um(), a.cmap, rng)
+        cb = fig.colorbar(im, ax=ax, shrink=0.9, extend="both")
         cb.set_label(f"{key} [{unit}]")
-        ax.set_xlabel("x [um]")
-        ax.set_ylabel("y [um] (impact plane at y = 0)")
-        ax.set_title(f"{title} of the target at t = {d['time_ns']:.0f} ns\n{run.label()}", fontsize=10)
-        fit_markers(fig, ax, sc, run.spacing_um(), len(x))
+        ax.set_xlabel("x [µm]")
+        ax.set_ylabel("y [µm] (impact plane at y = 0)")
+        how = "study's range" if a.ranges == "study" and rng == STUDY_RANGES[key] else "colour range"
+        ax.set_title(f"{title} of the target at t = {d['time_ns']:.0f} ns ({how} {rng[0]:.3g}-{rng[1]:.3g} {unit})"
+                     f"\n{run.label()}", fontsize=10)
         written.append(save(fig, os.path.join(figdir(run.dir), name), a.dpi))
         if abs(snap_t - a.time_ns) > 0.05 * max(a.time_ns, 1.0):
             note(f"note: {name} ({run.dir}): nearest snapshot to {a.time_ns:g} ns is at {snap_t:.1f} ns")
@@ -496,7 +568,7 @@ def fig_velocity(run, a):
             front = 0.5 * (y.min() + y.max())
             how = "\n(front.csv missing or empty: window at mid-height)"
         else:
-            how = f"\n(compression front at y = {front:.0f} um)"
+            how = f"\n(compression front at y = {front:.0f} µm)"
         y1 = min(front, y.max())
         y0 = max(y1 - 200.0, min(0.0, y.min()))
         y1 = max(y1, y0 + min(200.0, np.ptp(y)))
@@ -545,9 +617,9 @@ def fig_velocity(run, a):
         ax.quiverkey(q, 0.88, 1.02, ref, f"{ref:g} m/s", labelpos="W", coordinates="axes")
     cb = fig.colorbar(q, ax=ax, shrink=0.9, extend="max")
     cb.set_label("|u - <u>| [m/s]" if a.vel_frame == "window" else "|u| [m/s]")
-    ax.set_xlabel("x [um]")
-    ax.set_ylabel("y [um]")
-    ax.set_title(f"Velocity field at t = {t:.0f} ns, window x {x0:.0f}-{x1:.0f} um, y {y0:.0f}-{y1:.0f} um"
+    ax.set_xlabel("x [µm]")
+    ax.set_ylabel("y [µm]")
+    ax.set_title(f"Velocity field at t = {t:.0f} ns, window x {x0:.0f}-{x1:.0f} µm, y {y0:.0f}-{y1:.0f} µm"
                  f"{how}\n{frame}; {sub}\n{run.label()}", fontsize=9)
     fit_markers(fig, ax, bg, run.spacing_um(), len(xs))
     return [save(fig, os.path.join(figdir(run.dir), "velocity_field.png"), a.dpi)]
@@ -619,10 +691,10 @@ def dist_times(run, a):
 def fig_distributions(run, a):
     if a.region_y:
         (y0, y1), xr = a.region_y, None
-        name = where = f"band y = {y0:g}-{y1:g} um"
+        name = where = f"band y = {y0:g}-{y1:g} µm"
     else:
         name, y0, y1, xr = run.region(a.region)
-        where = f"region {name} (y = {y0:g}-{y1:g} um)"
+        where = f"region {name} (y = {y0:g}-{y1:g} µm)"
     data = []
     for t, path in dist_times(run, a):
         d = run.load(path, ["pressure", "temperature", "density", "velocity_y"])
@@ -712,7 +784,7 @@ def fig_history(run, a):
     except Skip:
         no_data(ax, "front.csv missing or empty")
         note(f"note: history.png ({run.dir}): front.csv missing or empty, panel left empty")
-    ax.set_ylabel("front y [um]")
+    ax.set_ylabel("front y [µm]")
     ax.set_title("Leading edge of the compression wave in the target", fontsize=10)
     ax = axes[1]
     try:
@@ -798,10 +870,15 @@ def parse_args(argv):
     ap.add_argument("--time-ns", type=float, default=500.0,
                     help="time of the maps and the velocity field (nearest snapshot) [ns]; default 500")
     ap.add_argument("--region", default="I", help="region of the distributions and the comparison; default I")
-    ap.add_argument("--p-range", type=float, nargs=2, default=[0.0, 50.0], metavar=("LO", "HI"),
-                    help="colour range of map_P [GPa]; default 0 50")
-    ap.add_argument("--t-range", type=float, nargs=2, default=[300.0, 500.0], metavar=("LO", "HI"),
-                    help="colour range of map_T [K]; default 300 500")
+    ap.add_argument("--p-range", type=float, nargs=2, metavar=("LO", "HI"),
+                    help="colour range of map_P [GPa] (default: the case's [figures] p_range, else the "
+                         "1st to 99th percentile of the shown snapshot, or the --ranges preset)")
+    ap.add_argument("--t-range", type=float, nargs=2, metavar=("LO", "HI"),
+                    help="colour range of map_T [K] (default: as --p-range)")
+    ap.add_argument("--ranges", choices=("data", "study"), default="data",
+                    help="colour ranges of the maps not set by --p-range / --t-range: 'data' (1st-99th "
+                         "percentile of the shown snapshot, default) or 'study' (the reference study's "
+                         "0-50 GPa and 300-500 K)")
     ap.add_argument("--cmap", default="turbo", help="matplotlib colour map of maps and vectors; default turbo")
     ap.add_argument("--vel-x", type=float, nargs=2, metavar=("X0", "X1"),
                     help="x window of the velocity field [um] (default: 200 um about the centre)")

@@ -171,3 +171,43 @@ TEST_CASE("L is stored only where asked: the same run, the statistics rows read 
   CHECK(moving);
   std::filesystem::remove_all(out);
 }
+
+// Default regions: the study's bands (I 100-900, II 100-600, III 100-300 um above the impact
+// plane) when the target reaches 1000 um, scaled by height / 1000 um for a shorter one, so they
+// stay inside the target and apart.
+TEST_CASE("case: default regions fit inside the target", "[case]") {
+  auto bands = [](double target_top_um) {
+    auto doc = toml::parse(kCase);
+    apply_overrides(doc, {"grid.y_range_um=[0.0, " + std::to_string(target_top_um + 100.0) + "]"});
+    doc["bodies"].as_array()->get(0)->as_table()->insert_or_assign(
+        "y_range_um", toml::array{0.0, target_top_um});
+    return build_scene(doc, "t", ".").regions;
+  };
+  const auto tall = bands(2000.0);
+  REQUIRE(tall.size() == 3);
+  CHECK(tall[0].y0 == Approx(100e-6));
+  CHECK(tall[0].y1 == Approx(900e-6));
+  CHECK(tall[1].y1 == Approx(600e-6));
+  CHECK(tall[2].y1 == Approx(300e-6));
+  const auto shortr = bands(400.0);
+  CHECK(shortr[0].y0 == Approx(40e-6));
+  CHECK(shortr[0].y1 == Approx(360e-6));
+  CHECK(shortr[1].y1 == Approx(240e-6));
+  CHECK(shortr[2].y1 == Approx(120e-6));
+  for (const auto& r : shortr) CHECK(r.y1 < 400e-6);
+}
+
+// [figures]: optional colour ranges of the maps, validated and carried in the resolved case.
+TEST_CASE("case: [figures] colour ranges", "[case]") {
+  auto doc = toml::parse(std::string(kCase) + "\n[figures]\np_range_GPa = [0.0, 50.0]\nt_range_K = [300.0, 500.0]\n");
+  const Scene sc = build_scene(doc, "t", ".");
+  const auto* fig = sc.resolved["figures"].as_table();
+  REQUIRE(fig);
+  CHECK(fig->contains("p_range_GPa"));  // as written
+  CHECK(fig->contains("t_range_K"));
+  auto bad = toml::parse(std::string(kCase) + "\n[figures]\np_range_GPa = [50.0, 0.0]\n");
+  CHECK_THROWS_WITH(build_scene(bad, "t", "."), Catch::Contains("figures.p_range"));
+  auto typo = toml::parse(std::string(kCase) + "\n[figures]\np_rang_GPa = [0.0, 50.0]\n");
+  CHECK_THROWS_WITH(build_scene(typo, "t", "."), Catch::Contains("p_rang"));
+}
+
