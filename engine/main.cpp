@@ -36,6 +36,7 @@ void default_wait_policy(char** argv) {
 int main(int argc, char** argv) {
   default_wait_policy(argv);
   CLI::App app{"shockmpm: Material Point Method for shock waves in porous metals"};
+  app.set_version_flag("--version", std::string("shockmpm ") + SHOCKMPM_VERSION);
   app.require_subcommand(1);
   std::string case_file, out_dir;
   int threads = 0;

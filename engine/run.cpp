@@ -21,8 +21,10 @@ namespace smpm {
 
 namespace {
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted = true; }
+// The signal that asked the run to stop (SIGINT or SIGTERM; 0: none): the run stops after the
+// current step and writes its last state, as for a batch scheduler's SIGTERM.
+std::atomic<int> g_stop_signal{0};
+extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
 
 // Peak resident set size of the process [bytes] (Linux reports KiB).
 long long peak_rss_bytes() {
@@ -231,6 +233,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       }
       series << '\n';
     }
+    series.flush();
   };
   auto write_series_h5 = [&] {
     Timed t(s.output_seconds);
@@ -249,7 +252,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     Timed t(s.diagnostics_seconds);
     const auto& g = scene.geom;
     const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
-    if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
+    if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n' << std::flush;
   };
   std::ofstream energy(out / "energy.csv");
   energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m\n";
@@ -265,7 +268,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     const auto e = sim.energy();
     const auto q = sim.momentum();
     energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
-           << q[1] << '\n';
+           << q[1] << '\n' << std::flush;
   };
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads);
@@ -278,8 +281,9 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
                 out.string().c_str());
     std::fflush(stdout);
   }
-  std::signal(SIGINT, on_sigint);
-  g_interrupted = false;
+  g_stop_signal = 0;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
 
   const double t_end = scene.run.end_time;
   const double eps = 1e-12 * std::max(t_end, 1e-30);
@@ -295,9 +299,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     write_series();
     next_energy = scene.run.diagnostics_interval;
     while (sim.time() < t_end - eps) {
-      if (g_interrupted) {
+      if (const int sig = g_stop_signal) {
         s.status = "interrupted";
-        s.message = "interrupted by SIGINT at step " + std::to_string(sim.steps());
+        s.message = std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at step " +
+                    std::to_string(sim.steps());
         break;
       }
       if (scene.run.max_steps > 0 && sim.steps() >= scene.run.max_steps) {
@@ -314,7 +319,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       particle_steps += n;
       if (has_wall) {
         Timed t(s.diagnostics_seconds);
-        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
+        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n'
+             << std::flush;  // every CSV row is flushed whole: a killed run leaves no cut row
       }
       if (sim.time() >= next_energy - eps) {
         write_energy();
@@ -335,8 +341,6 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
                     sim.steps(), sim.time() * 1e9, sim.last_dt() * 1e9, 100 * frac,
                     hms(el * (1 - frac) / std::max(frac, 1e-12)).c_str(), particle_steps / el * 1e-6);
         std::fflush(stdout);
-        for (std::ofstream* f : {&energy, &front, &series, &wall})
-          if (f->is_open()) f->flush();
       }
     }
     if (s.status == "running") {
@@ -362,9 +366,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   if (!opt.quiet) {
     std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",
                 s.status.c_str(), s.steps, s.end_time * 1e9, s.wall_seconds, s.particle_steps_per_s * 1e-6, threads);
-    if (s.status != "completed") std::printf("reason: %s\n", s.message.c_str());
     std::printf("results in %s\n", out.string().c_str());
   }
+  // why a run stopped early goes to stderr, with --quiet too
+  if (s.status != "completed") std::fprintf(stderr, "%s: %s\n", s.status.c_str(), s.message.c_str());
   return s;
 }
 

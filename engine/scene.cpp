@@ -69,7 +69,9 @@ Material read_material(CaseReader r, const std::string& name, const toml::table*
 
 // The materials library: `materials_file` (relative to the case file), by default the nearest
 // materials.toml in the case file's directory or above it.
-std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem::path& case_dir) {
+std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem::path& case_path) {
+  // a bare file name ("shockmpm check quickstart.toml") has an empty directory: the current one
+  const std::filesystem::path case_dir = case_path.empty() ? std::filesystem::path(".") : case_path;
   if (top.has("materials_file")) {
     const auto p = case_dir / top.string("materials_file");
     if (!std::filesystem::exists(p))
