@@ -331,6 +331,27 @@ void apply_overrides(toml::table& t, const std::vector<std::string>& sets) {
         cur->insert(part, toml::table{});
         n = cur->get(part);
       }
+      if (n->is_array_of_tables()) {  // [[bodies]]: the next part names an entry, by index or name
+        toml::array& arr = *n->as_array();
+        const auto dot2 = rest.find('.');
+        if (dot2 == std::string::npos)
+          throw CaseError("--set '" + s + "': '" + part + "' is a list of tables: name an entry, as " + part +
+                          ".0.key=value (by index) or " + part + ".NAME.key=value (by its name key)");
+        const std::string sel = rest.substr(0, dot2);
+        rest = rest.substr(dot2 + 1);
+        std::string names;
+        toml::table* found = nullptr;
+        for (std::size_t k = 0; k < arr.size(); ++k) {
+          toml::table* e = arr.get(k)->as_table();
+          const std::string name = e->get_as<std::string>("name") ? e->get_as<std::string>("name")->get() : "";
+          names += (names.empty() ? "" : ", ") + std::to_string(k) + (name.empty() ? "" : " (" + name + ")");
+          if (sel == std::to_string(k) || (!name.empty() && sel == name)) found = e;
+        }
+        if (!found)
+          throw CaseError("--set '" + s + "': '" + part + "' has no entry '" + sel + "'; its entries: " + names);
+        cur = found;
+        continue;
+      }
       if (!n->is_table()) throw CaseError("--set '" + s + "': '" + part + "' is not a table");
       cur = n->as_table();
     }

@@ -211,3 +211,20 @@ TEST_CASE("case: [figures] colour ranges", "[case]") {
   CHECK_THROWS_WITH(build_scene(typo, "t", "."), Catch::Contains("p_rang"));
 }
 
+// --set reaches the entries of [[bodies]] by index or by name: the study's sweeps (impact speed,
+// porosity, void radius) are one command each.
+TEST_CASE("case: --set into [[bodies]] by index and by name", "[case]") {
+  auto with = [](const std::string& set) {
+    auto doc = toml::parse(kCase);
+    apply_overrides(doc, {set});
+    return build_scene(doc, "t", ".");
+  };
+  CHECK(with("bodies.0.velocity_m_s=[0.0, -800.0]").bodies[0].vy0 == -800.0);
+  CHECK(with("bodies.target.velocity_m_s=[0.0, -700.0]").bodies[0].vy0 == -700.0);
+  CHECK_THROWS_WITH(with("bodies.3.velocity_m_s=[0.0, -1.0]"), Catch::Contains("no entry '3'") && Catch::Contains("0 (target)"));
+  CHECK_THROWS_WITH(with("bodies.flyer.velocity_m_s=[0.0, -1.0]"), Catch::Contains("no entry 'flyer'"));
+  CHECK_THROWS_WITH(with("bodies.velocity_m_s=[0.0, -1.0]"), Catch::Contains("name an entry"));
+  // a typo inside the entry is still caught by the case reader
+  CHECK_THROWS_WITH(with("bodies.0.velocty_m_s=[0.0, -1.0]"), Catch::Contains("velocty"));
+}
+
