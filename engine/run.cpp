@@ -121,9 +121,12 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
     if (m.eos == EosKind::MieGruneisen && up > 0.0) {
       // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
       const auto h = hugoniot(m, up);
-      bt.insert("dense_hugoniot", toml::table{{"up_m_s", h.up}, {"Us_m_s", h.Us}, {"P_Pa", h.P},
-                                              {"rho_kg_m3", h.rho}, {"e_J_kg", h.e}, {"T_K", h.T},
-                                              {"T_simple_K", h.T_simple}});
+      if (h.in_range)
+        bt.insert("dense_hugoniot", toml::table{{"up_m_s", h.up}, {"Us_m_s", h.Us}, {"P_Pa", h.P},
+                                                {"rho_kg_m3", h.rho}, {"e_J_kg", h.e}, {"T_K", h.T},
+                                                {"T_simple_K", h.T_simple}});
+      else
+        bt.insert("dense_hugoniot", toml::table{{"beyond_range", true}, {"largest_up_m_s", h.up}});
     }
     bodies.push_back(std::move(bt));
   }
@@ -169,6 +172,11 @@ std::string describe_scene(const Scene& sc) {
     const double up = std::hypot(b.vx0, b.vy0);
     if (m.eos != EosKind::MieGruneisen || up <= 0.0) continue;
     const auto h = hugoniot(m, up);
+    if (!h.in_range) {
+      o << "  " << b.name << " stopped from " << up << " m/s: beyond the range of the EOS's dense Hugoniot "
+        << "(it reaches up = " << h.up << " m/s at " << h.rho / m.rho0 << " rho0); no exact state\n";
+      continue;
+    }
     o << "  " << b.name << " stopped from " << up << " m/s (dense Hugoniot): Us " << h.Us << " m/s, P "
       << h.P * 1e-9 << " GPa, rho " << h.rho << " kg/m^3, T " << h.T << " K (T0 + e/cv: " << h.T_simple << " K)\n";
   }

@@ -67,7 +67,12 @@ HugoniotState hugoniot(const Material& m, double up) {
     P = eos.cold(rho) / (1.0 - 0.5 * eos.gamma_rho() * dV);
     return std::sqrt(std::max(0.0, P * dV));
   };
-  double lo = m.rho0, hi = m.rho0 * 1.999, P = 0;
+  // the bracket: up to 4 rho0 (eta = 0.75, the end of the isentrope table) and below the
+  // compression where 1 - gamma_rho (V0 - V) / 2 reaches 0
+  double hi = 4.0 * m.rho0 * (1.0 - 1e-12);
+  const double V_sing = V0 - 2.0 / eos.gamma_rho();
+  if (V_sing > 0.0) hi = std::min(hi, (1.0 - 1e-9) / V_sing);
+  double lo = m.rho0, P = 0;
   for (int it = 0; it < 200; ++it) {
     const double mid = 0.5 * (lo + hi);
     (state(mid, P) < up ? lo : hi) = mid;
@@ -75,6 +80,7 @@ HugoniotState hugoniot(const Material& m, double up) {
   HugoniotState h;
   h.rho = 0.5 * (lo + hi);
   h.up = state(h.rho, P);
+  h.in_range = std::abs(h.up - up) <= 1e-6 * up;
   h.P = P;
   h.Us = h.P / (m.rho0 * h.up);
   h.e = 0.5 * h.P * (V0 - 1.0 / h.rho);

@@ -40,6 +40,10 @@ struct HugoniotState {
   double e = 0;            // [J/kg] = up^2 / 2
   double T = 0;            // [K], isentrope-referenced
   double T_simple = 0;     // [K], T0 + e / cv
+  // false: up is beyond what the EOS's Hugoniot reaches below 4 rho0 (the range of the isentrope
+  // table, engine/thermo.cpp) or its singular compression; the state is then that of the largest
+  // up reached, and callers must say so instead of reporting it as exact
+  bool in_range = true;
 };
 HugoniotState hugoniot(const Material& m, double up);
 

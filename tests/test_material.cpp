@@ -175,6 +175,15 @@ TEST_CASE("Hugoniot of aluminium from the code's EOS against physics.md section 
   }
   // the linear-Hugoniot claim of physics.md for up to 1 km/s: 0.1 %
   CHECK(rel(hugoniot(al, 1000).Us, c0 + lam * 1000) < 1e-3);
+  // beyond the range: said, not capped (the old 1.999 rho0 bracket gave up 7274 m/s for any
+  // larger input); within it, the speed asked for
+  CHECK(hugoniot(al, 1000).in_range);
+  const HugoniotState fast = hugoniot(al, 9000);
+  CHECK(fast.in_range);
+  CHECK(rel(fast.up, 9000) < 1e-6);
+  const HugoniotState absurd = hugoniot(al, 1e9);
+  CHECK_FALSE(absurd.in_range);
+  CHECK(absurd.up < 1e6);
 }
 
 // ---- 3. Thermo ---------------------------------------------------------------------------------
