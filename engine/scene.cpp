@@ -139,6 +139,9 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
   {
     CaseReader r = top.table("run");
     s.run.end_time = r.quantity("end_time", kTime, 0.0, kInf);
+    if (!(s.run.end_time > 0.0))
+      throw CaseError("case key 'run.end_time': value 0 is out of range: the simulated time must be above 0 "
+                      "(e.g. end_time_ns = 200)");
     s.run.snapshot_interval = r.quantity("snapshot_interval", kTime, 0.0, kInf, 0.0);
     s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
     s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);

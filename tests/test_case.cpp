@@ -228,3 +228,10 @@ TEST_CASE("case: --set into [[bodies]] by index and by name", "[case]") {
   CHECK_THROWS_WITH(with("bodies.0.velocty_m_s=[0.0, -1.0]"), Catch::Contains("velocty"));
 }
 
+// end_time = 0 is refused (it "completed" after 0 steps).
+TEST_CASE("case: end_time must be positive", "[case]") {
+  auto doc = toml::parse(kCase);
+  apply_overrides(doc, {"run.end_time_ns=0.0"});
+  CHECK_THROWS_WITH(build_scene(doc, "t", "."), Catch::Contains("run.end_time") && Catch::Contains("above 0"));
+}
+
