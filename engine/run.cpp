@@ -186,6 +186,26 @@ std::string describe_scene(const Scene& sc) {
   return o.str();
 }
 
+std::string resolved_case_text(const Scene& scene) {
+  toml::table t = scene.resolved;
+  std::ostringstream o;
+  o << "# The case as run by shockmpm " << SHOCKMPM_VERSION << ", every default filled in; it runs again as it is.\n";
+  if (const auto* lib = t.get_as<std::string>("materials_file_used"))
+    o << "# Materials library read: " << lib->get() << "\n";
+  t.erase("materials_file_used");
+  // each material is written whole: the library entry it started from is a comment, so the file
+  // needs no library next to it
+  if (auto* mats = t.get_as<toml::table>("materials"))
+    for (auto&& [name, m] : *mats)
+      if (auto* mt = m.as_table())
+        if (const auto* base = mt->get_as<std::string>("base")) {
+          o << "# materials." << name.str() << ": from the library entry '" << base->get() << "'\n";
+          mt->erase("base");
+        }
+  o << "\n" << t << "\n";
+  return o.str();
+}
+
 RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
   const int threads = omp_get_max_threads();
@@ -193,7 +213,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   std::filesystem::create_directories(out);
   {
     std::ofstream c(out / "case_resolved.toml");
-    c << scene.resolved << "\n";
+    c << resolved_case_text(scene);
   }
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
   // a run owns its output directory: snapshots of an earlier run there would mix with this one's

@@ -28,6 +28,10 @@ struct RunSummary {
 
 RunSummary run_scene(Scene& scene, const RunOptions& opt);
 
+// OUT/case_resolved.toml: the resolved case (every default filled in), which runs again as it
+// is: the materials are written whole, their library entry and file as comments.
+std::string resolved_case_text(const Scene& scene);
+
 // The text `shockmpm check` prints: particles, porosity, grid, time step, steps, memory.
 std::string describe_scene(const Scene& scene);
 
