@@ -9,9 +9,9 @@
 
 #include "engine/diagnostics.hpp"
 #include "engine/timer.hpp"
+#include "engine/transfer_step.hpp"
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
-#include "engine/transfer_step.hpp"
 #include "kernels/transfer.hpp"
 
 namespace smpm {

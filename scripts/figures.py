@@ -422,14 +422,14 @@ def pixel_map(ax, x, y, values, spacing_um, cmap, rng):
     # A deformed lattice leaves some pixels of the material without a point and puts two in
     # others: an empty pixel with at least 5 of its 8 neighbours filled is material, and gets
     # their mean (twice). Voids and free space, many pixels wide, stay blank.
+    def neighbours(a):  # the 8 neighbours of every pixel, as arrays of a's shape (0 outside)
+        p = np.pad(a, 1)
+        return [p[1 + i:p.shape[0] - 1 + i, 1 + j:p.shape[1] - 1 + j]
+                for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j]
+
     for _ in range(2):
-        cp, tp = np.pad(count, 1), np.pad(total, 1)
-        filled = sum((cp[1 + i:cp.shape[0] - 1 + i, 1 + j:cp.shape[1] - 1 + j] > 0).astype(int)
-                     for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
-        nsum = sum(tp[1 + i:tp.shape[0] - 1 + i, 1 + j:tp.shape[1] - 1 + j]
-                   for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
-        ncnt = sum(cp[1 + i:cp.shape[0] - 1 + i, 1 + j:cp.shape[1] - 1 + j]
-                   for i in (-1, 0, 1) for j in (-1, 0, 1) if i or j)
+        filled = sum((c > 0).astype(int) for c in neighbours(count))
+        nsum, ncnt = sum(neighbours(total)), sum(neighbours(count))
         hole = (count == 0) & (filled >= 5)
         total = np.where(hole, nsum / np.maximum(ncnt, 1), total)
         count = np.where(hole, 1.0, count)
