@@ -1,5 +1,6 @@
 #include "engine/diagnostics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -103,6 +104,91 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
     s.Uy = moments(uy[r]);
   }
   return out;
+}
+
+double open_area(const Particles& P, std::uint8_t body, double x0, double x1, double y0, double y1, double pixel,
+                 double radius, double period, double xp0) {
+  double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300, smax = 0.0;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (P.body[p] != body) continue;
+    bx0 = std::min(bx0, P.x[p]); bx1 = std::max(bx1, P.x[p]);
+    by0 = std::min(by0, P.y[p]); by1 = std::max(by1, P.y[p]);
+    smax = std::max(smax, std::sqrt(P.V[p]));
+  }
+  if (bx1 < bx0 || !(pixel > 0.0)) return 0.0;
+  const bool wrap = period > 0.0;
+  const double pad = 2.0 * pixel + smax;
+  if (wrap) {
+    bx0 = xp0;
+    bx1 = xp0 + period;
+  } else {
+    bx0 -= pad;
+    bx1 += pad;
+  }
+  by0 -= pad;
+  by1 += pad;
+  const long nx = std::max(1L, std::lround((bx1 - bx0) / pixel)), ny = static_cast<long>(std::ceil((by1 - by0) / pixel));
+  const double px = (bx1 - bx0) / static_cast<double>(nx);  // pixel width (wrap: the period tiles exactly)
+  std::vector<std::uint8_t> img(static_cast<std::size_t>(nx * ny), 0);  // 1 covered, 2 outside
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (P.body[p] != body) continue;
+    const double rad = radius * std::sqrt(std::max(P.V[p], 0.0)), r2 = rad * rad;
+    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.y[p] - rad - by0) / pixel - 0.5)));
+    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.y[p] + rad - by0) / pixel - 0.5)));
+    const long i0 = static_cast<long>(std::ceil((P.x[p] - rad - bx0) / px - 0.5));
+    const long i1 = static_cast<long>(std::floor((P.x[p] + rad - bx0) / px - 0.5));
+    for (long j = j0; j <= j1; ++j)
+      for (long i = i0; i <= i1; ++i) {
+        const double ex = bx0 + (i + 0.5) * px - P.x[p], ey = by0 + (j + 0.5) * pixel - P.y[p];
+        if (ex * ex + ey * ey > r2) continue;
+        long ii = i;
+        if (wrap) ii = ((ii % nx) + nx) % nx;
+        else if (ii < 0 || ii >= nx) continue;
+        img[static_cast<std::size_t>(j * nx + ii)] = 1;
+      }
+  }
+  // flood the outside from the border rows (and columns, without wrap)
+  std::vector<long> stack;
+  auto seed = [&](long i, long j) {
+    std::uint8_t& v = img[static_cast<std::size_t>(j * nx + i)];
+    if (v == 0) {
+      v = 2;
+      stack.push_back(j * nx + i);
+    }
+  };
+  for (long i = 0; i < nx; ++i) {
+    seed(i, 0);
+    seed(i, ny - 1);
+  }
+  if (!wrap)
+    for (long j = 0; j < ny; ++j) {
+      seed(0, j);
+      seed(nx - 1, j);
+    }
+  while (!stack.empty()) {
+    const long k = stack.back();
+    stack.pop_back();
+    const long i = k % nx, j = k / nx;
+    if (j > 0) seed(i, j - 1);
+    if (j < ny - 1) seed(i, j + 1);
+    if (wrap) {
+      seed((i + 1) % nx, j);
+      seed((i + nx - 1) % nx, j);
+    } else {
+      if (i > 0) seed(i - 1, j);
+      if (i < nx - 1) seed(i + 1, j);
+    }
+  }
+  double area = 0.0;
+  for (long j = 0; j < ny; ++j) {
+    const double yc = by0 + (j + 0.5) * pixel;
+    if (yc < y0 || yc > y1) continue;
+    for (long i = 0; i < nx; ++i) {
+      const double xc = bx0 + (i + 0.5) * px;
+      if (img[static_cast<std::size_t>(j * nx + i)] == 0 && xc >= x0 && xc <= x1) area += px * pixel;
+    }
+  }
+  return area;
 }
 
 }  // namespace smpm

@@ -10,11 +10,12 @@ struct Grid {
   kern::GridGeom geom;
   std::vector<double> m, px, py, fx, fy, vx, vy, dvx, dvy;
 
-  std::vector<double> gmx, gmy, vol;  // contact: mass gradient and volume per field
+  std::vector<double> gmx, gmy, vol, heat;  // several fields: mass gradient, volume, contact heat
   int fields = 1;
 
   Grid() = default;
-  // fields = 2: multi-body contact, every array holds one block per velocity field.
+  // fields = 2: two velocity fields (two-body contact or separated void faces), every array holds
+  // one block per field.
   Grid(const kern::GridGeom& g, bool flip, int nfields = 1) : geom(g), fields(nfields) {
     const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields);
     for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy}) a->assign(nn, 0.0);
@@ -23,7 +24,7 @@ struct Grid {
       dvy.assign(nn, 0.0);
     }
     if (nfields > 1)
-      for (auto* a : {&gmx, &gmy, &vol}) a->assign(nn, 0.0);
+      for (auto* a : {&gmx, &gmy, &vol, &heat}) a->assign(nn, 0.0);
   }
   kern::GridView view() {
     auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
@@ -31,13 +32,14 @@ struct Grid {
     G.gmx = d(gmx);
     G.gmy = d(gmy);
     G.vol = d(vol);
+    G.heat = d(heat);
     G.fields = fields;
     G.fstride = fields > 1 ? geom.num_nodes() : 0;
     return G;
   }
   std::size_t bytes() const {
     std::size_t b = 0;
-    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy, &gmx, &gmy, &vol}) b += a->capacity() * sizeof(double);
+    for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy, &dvx, &dvy, &gmx, &gmy, &vol, &heat}) b += a->capacity() * sizeof(double);
     return b;
   }
 };

@@ -22,6 +22,7 @@ void Particles::resize(std::size_t n) {
   for_each_double(*this, [n](std::vector<double>& v) { v.resize(n, 0.0); });
   id.resize(n, 0);
   body.resize(n, 0);
+  if (!field.empty()) field.resize(n, 0);
 }
 
 void Particles::enable(std::vector<double>& field, std::size_t n, bool on) {
@@ -59,12 +60,16 @@ void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std
   id.swap(su);
   kern::gather_permute(body.data(), order, n, sb.data());
   body.swap(sb);
+  if (!field.empty()) {
+    kern::gather_permute(field.data(), order, n, sb.data());
+    field.swap(sb);
+  }
 }
 
 std::size_t Particles::bytes() const {
   std::size_t b = 0;
   for_each_double(const_cast<Particles&>(*this), [&](std::vector<double>& v) { b += v.capacity() * sizeof(double); });
-  return b + id.capacity() * sizeof(std::uint32_t) + body.capacity();
+  return b + id.capacity() * sizeof(std::uint32_t) + body.capacity() + field.capacity();
 }
 
 std::vector<std::string> Particles::fields_in_use() const {
@@ -75,6 +80,7 @@ std::vector<std::string> Particles::fields_in_use() const {
     if (!v->empty()) names.emplace_back(name);
   names.emplace_back("id");
   names.emplace_back("body");
+  if (!field.empty()) names.emplace_back("field");
   return names;
 }
 
@@ -86,6 +92,10 @@ void Particles::append(const Particles& o) {
   cat(Cxx, o.Cxx); cat(Cxy, o.Cxy); cat(Cyx, o.Cyx); cat(Cyy, o.Cyy);
   cat(e, o.e); cat(epsp, o.epsp); cat(q, o.q); cat(wp, o.wp);
   cat(id, o.id); cat(body, o.body);
+  if (!field.empty() || !o.field.empty()) {  // a side without fields is all field 0
+    field.resize(size() - o.size(), 0);
+    o.field.empty() ? field.resize(size(), 0) : cat(field, o.field);
+  }
 }
 
 }  // namespace smpm

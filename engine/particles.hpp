@@ -27,6 +27,9 @@ struct Particles {
   std::vector<double> wp;     // plastic work per mass [J/kg] (heat fraction below 1)
   std::vector<std::uint32_t> id;  // original index, permuted along with the rest
   std::vector<std::uint8_t> body; // body index
+  // Velocity field of each point when the grid has several (two-body contact: the body;
+  // separated void faces: the side of its nearest void, assign_void_sides); else empty.
+  std::vector<std::uint8_t> field;
 
   std::size_t size() const { return x.size(); }
   void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)

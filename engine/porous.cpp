@@ -1,5 +1,6 @@
 #include "engine/porous.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -10,10 +11,11 @@ namespace smpm {
 
 PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1,
                        const VoidSpec& spec, double period) {
-  if (spec.radius <= 0.0) throw std::invalid_argument("void radius must be positive");
-  if (spec.radius_spread < 0.0 || spec.radius_spread >= spec.radius)
+  const bool listed = !spec.centers.empty();
+  if (!listed && spec.radius <= 0.0) throw std::invalid_argument("void radius must be positive");
+  if (!listed && (spec.radius_spread < 0.0 || spec.radius_spread >= spec.radius))
     throw std::invalid_argument("void radius spread must be in [0, radius)");
-  if ((spec.porosity < 0.0) == (spec.count < 0))
+  if (!listed && (spec.porosity < 0.0) == (spec.count < 0))
     throw std::invalid_argument("give either a target porosity or a void count");
   const std::size_t n = P.size();
   // lattice index of every point: points sit at sub-cell centres (a + 1/2) d
@@ -34,12 +36,20 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
                                                                      spec.radius + spec.radius_spread);
   const long pa = period > 0.0 ? std::lround(period / d) : 0;  // period in lattice steps
   PorousResult r;
-  const long max_voids = spec.count >= 0 ? spec.count : std::numeric_limits<long>::max();
+  const long max_voids = listed ? static_cast<long>(spec.centers.size())
+                                : spec.count >= 0 ? spec.count : std::numeric_limits<long>::max();
   while (r.voids < max_voids) {
-    if (spec.porosity >= 0.0 && static_cast<double>(nremoved) >= spec.porosity * static_cast<double>(n)) break;
-    if (spec.porosity >= 0.0 && nremoved == n) break;
-    const double cx = ux(rng), cy = uy(rng), rad = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
+    if (!listed && spec.porosity >= 0.0 && static_cast<double>(nremoved) >= spec.porosity * static_cast<double>(n)) break;
+    if (!listed && spec.porosity >= 0.0 && nremoved == n) break;
+    double cx, cy, rad;
+    if (listed) {
+      const Void& v = spec.centers[static_cast<std::size_t>(r.voids)];
+      cx = v.x; cy = v.y; rad = v.r;
+    } else {
+      cx = ux(rng); cy = uy(rng); rad = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
+    }
     ++r.voids;
+    r.cut.push_back({cx, cy, rad});
     const long ca0 = static_cast<long>(std::floor((cx - rad - ox) / d));
     const long ca1 = static_cast<long>(std::floor((cx + rad - ox) / d));
     const long cb0 = static_cast<long>(std::floor((cy - rad - oy) / d));
@@ -82,6 +92,70 @@ Particles mirror_y(const Particles& P, double y_plane) {
     Q.vy[i] = -P.vy[i];
   }
   return Q;
+}
+
+}  // namespace smpm
+
+namespace smpm {
+
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
+                       double period) {
+  const std::size_t n = P.size();
+  P.field.assign(n, 0);
+  if (voids.empty() || n == 0) return;
+  // voids binned into square buckets of side B >= r_max + reach: a point's candidates lie in
+  // its own and the 8 neighbouring buckets
+  double rmax = 0.0, xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;  // [m]
+  for (const Void& v : voids) {
+    rmax = std::max(rmax, v.r);
+    xmin = std::min(xmin, v.x); xmax = std::max(xmax, v.x);
+    ymin = std::min(ymin, v.y); ymax = std::max(ymax, v.y);
+  }
+  const double B = rmax + reach;
+  // periodic x: the buckets tile the period (origin xmin) and their neighbours wrap
+  const bool wrap = period > 0.0;
+  const long nbx = wrap ? std::max(1L, static_cast<long>(period / B)) : static_cast<long>((xmax - xmin) / B) + 1;
+  const double Bx = wrap ? period / static_cast<double>(nbx) : B;
+  const long nby = static_cast<long>((ymax - ymin) / B) + 1;
+  auto column = [&](double x) {
+    const double u = wrap ? x - xmin - period * std::floor((x - xmin) / period) : x - xmin;
+    return std::min(static_cast<long>(std::floor(u / Bx)), wrap ? nbx - 1 : std::numeric_limits<long>::max());
+  };
+  std::vector<std::vector<std::uint32_t>> bucket(static_cast<std::size_t>(nbx * nby));
+  for (std::size_t k = 0; k < voids.size(); ++k) {
+    const long bx = column(voids[k].x), by = static_cast<long>((voids[k].y - ymin) / B);
+    bucket[static_cast<std::size_t>(by * nbx + bx)].push_back(static_cast<std::uint32_t>(k));
+  }
+#pragma omp parallel for schedule(static)
+  for (std::size_t p = 0; p < n; ++p) {
+    const double x = P.x[p], y = P.y[p];
+    const long by = static_cast<long>(std::floor((y - ymin) / B)), bx = column(x);
+    double best = reach;
+    double side = 0.0;
+    for (long j = std::max(by - 1, 0L); j <= std::min(by + 1, nby - 1); ++j) {
+      for (long di = -1; di <= 1; ++di) {
+        long i = bx + di;
+        if (wrap) {
+          if (nbx < 3 && di != 0 && (nbx == 1 || di == 1)) continue;  // each column once
+          i = (i + nbx) % nbx;
+        } else if (i < 0 || i >= nbx) {
+          continue;
+        }
+        for (std::uint32_t k : bucket[static_cast<std::size_t>(j * nbx + i)]) {
+          const Void& v = voids[k];
+          double dx = x - v.x;
+          if (wrap) dx -= period * std::round(dx / period);
+          const double dy = y - v.y;
+          const double d = std::sqrt(dx * dx + dy * dy) - v.r;
+          if (d < best) {
+            best = d;
+            side = dx * sx + dy * sy;
+          }
+        }
+      }
+    }
+    P.field[p] = side > 0.0 ? 1 : 0;
+  }
 }
 
 }  // namespace smpm

@@ -4,10 +4,15 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "engine/particles.hpp"
 
 namespace smpm {
+
+struct Void {
+  double x = 0, y = 0, r = 0;  // centre and radius [m]
+};
 
 struct VoidSpec {
   double radius = 0.0;         // mean void radius [m]
@@ -15,11 +20,13 @@ struct VoidSpec {
   double porosity = -1.0;      // target porosity: voids are added until it is reached, or
   long count = -1;             // a fixed number of voids
   std::uint64_t seed = 1;      // same seed, same sample (generation is serial)
+  std::vector<Void> centers;   // explicit voids instead (radius and seed unused)
 };
 
 struct PorousResult {
   long voids = 0;
   double porosity = 0.0;  // achieved: removed points / points of the dense body
+  std::vector<Void> cut;  // the voids, in the order drawn
 };
 
 // Cuts voids from the points of P: one body on the lattice of spacing d whose points sit at
@@ -31,5 +38,14 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
 
 // Mirror image of P about the line y = y_plane (for the symmetric two-body collision).
 Particles mirror_y(const Particles& P, double y_plane);
+
+// Separated void faces: puts each point of P in velocity field 0 or 1 by the side of its
+// nearest void (nearest surface, |x - c| - r) it lies on along the unit direction (sx, sy)
+// (the impact direction): 1 where (x - c) . s > 0. The two faces of a void that a shock
+// closes along s then lie in different fields, which approach each other freely until they
+// meet (kern::grid_contact, weld). Points with no void within `reach` [m] of their surface
+// take field 0. period > 0: distances in x wrap. Sets P.field.
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
+                       double period);
 
 }  // namespace smpm

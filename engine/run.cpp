@@ -224,12 +224,38 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     }
   SnapshotWriter snaps(out / "fields");
   RunSummary s;
-  auto snapshot = [&] {
-    Timed t(s.output_seconds);
-    snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
-  };
   // the compression front runs through the target: the body named "target", else body 0
   const std::size_t target = scene.target;
+  // voids.csv: the void area left open in the target (and its share of each region's band),
+  // at every snapshot; pixels a quarter of the point spacing (open_area)
+  std::ofstream voids;
+  if (scene.bodies[target].voids > 0) {
+    voids.open(out / "voids.csv");
+    voids << "time_ns,region,open_area_um2,open_fraction\n" << std::setprecision(8);
+  }
+  auto write_voids = [&] {
+    if (!voids.is_open()) return;
+    Timed t(s.diagnostics_seconds);
+    const auto& g = scene.geom;
+    const double pixel = std::sqrt(scene.bodies[target].area / double(scene.bodies[target].particles)) / 4;  // [m]
+    const double period = g.periodic_x ? g.length_x() : 0.0, x1 = g.x0 + g.length_x();
+    const auto b = static_cast<std::uint8_t>(target);
+    const double all = open_area(sim.particles(), b, g.x0, x1, -1e300, 1e300, pixel, 0.75, period, g.x0);
+    voids << sim.time() * 1e9 << ",target," << all * 1e12 << ",nan\n";
+    for (const auto& r : scene.regions) {
+      if (r.body != b) continue;
+      const double a = open_area(sim.particles(), b, g.x0, x1, r.y0, r.y1, pixel, 0.75, period, g.x0);
+      voids << sim.time() * 1e9 << ',' << r.name << ',' << a * 1e12 << ',' << a / ((r.y1 - r.y0) * g.length_x()) << '\n';
+    }
+    voids.flush();
+  };
+  auto snapshot = [&] {
+    {
+      Timed t(s.output_seconds);
+      snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
+    }
+    write_voids();
+  };
   // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
   std::ofstream series(out / "series.csv");
   series << "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"

@@ -185,6 +185,10 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.solver.transfer = r.choice("transfer", {"apic", "flip"}, "apic") == "flip" ? Transfer::FLIP : Transfer::APIC;
     s.solver.flip_alpha = r.number("flip_alpha", 0.0, 1.0, 0.99);
     s.solver.scheme = r.choice("scheme", {"usl", "musl"}, "usl") == "musl" ? Scheme::MUSL : Scheme::USL;
+    {
+      const std::string sr = r.choice("strain_rate", {"auto", "midstep", "updated"}, "auto");
+      s.solver.strain_rate = sr == "midstep" ? StrainRate::Midstep : sr == "updated" ? StrainRate::Updated : StrainRate::Auto;
+    }
     s.solver.cfl = r.number("cfl", 1e-6, 1.0, 0.4);
     s.solver.fixed_dt = r.quantity("dt", kTime, 0.0, kInf, 0.0);
     s.solver.permute_every = static_cast<int>(r.integer("permute_every", 0, 1000000, 20));
@@ -218,6 +222,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     r.finish();
   }
   // [contact]
+  double void_reach_cells = 3.0;
   {
     CaseReader r = top.table("contact");
     s.solver.contact = r.choice("mode", {"single_field", "multi_field"}, "single_field") == "multi_field";
@@ -225,6 +230,18 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.solver.contact_volume_fraction = r.number("volume_fraction", 0.0, 2.0, 1.0);
     if (s.solver.contact && s.solver.scheme != Scheme::USL)
       throw CaseError("case key 'contact.mode': 'multi_field' runs with solver.scheme = \"usl\" only");
+    // void faces (checked against the bodies below): default 'separate' where a body has voids
+    // and nothing rules it out
+    bool porous = false;
+    if (const toml::array* bs = doc.get_as<toml::array>("bodies"))
+      for (const auto& b : *bs)
+        if (const toml::table* t = b.as_table()) porous = porous || t->contains("voids");
+    const bool can = porous && !s.solver.contact && s.solver.scheme == Scheme::USL;
+    if (r.choice("void_faces", {"separate", "single_field"}, can ? "separate" : "single_field") == "separate") {
+      s.solver.void_faces = VoidFaces::Separate;
+      s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.8);
+      void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
+    }
     r.finish();
   }
   // [materials.NAME]
@@ -341,6 +358,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         bx0 = sb.x0; bx1 = sb.x1; by0 = 2 * plane - sb.y1; by1 = 2 * plane - sb.y0;
         info.porosity = sb.porosity;
         info.voids = sb.voids;
+        for (Void v : sb.cut) info.cut.push_back({v.x, 2 * plane - v.y, v.r});
       } else if (r.choice("shape", {"rectangle", "disk"}, "rectangle") == "rectangle") {
         std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
         std::tie(by0, by1) = r.pair("y_range", kLength, true);
@@ -358,16 +376,23 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         VoidSpec spec;
         spec.radius = v.quantity("radius", kLength, 1e-12, kInf);
         spec.radius_spread = v.quantity("radius_spread", kLength, 0.0, spec.radius * (1 - 1e-12), 0.0);
-        if (v.has("porosity") == v.has("count"))
-          throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target) and 'count' (number of voids)");
-        if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
-        else spec.count = v.integer("count", 0, 100000000);
-        spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
+        if (int(v.has("porosity")) + int(v.has("count")) + int(v.has("center")) != 1)
+          throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
+                          "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
+        if (v.has("center")) {
+          const auto [cx, cy] = v.pair("center", kLength, false);
+          spec.centers.push_back({cx, cy, spec.radius});
+        } else {
+          if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
+          else spec.count = v.integer("count", 0, 100000000);
+          spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
+        }
         v.finish();
         const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
         const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, bx0, bx1, by0, by1, spec, period);
         info.porosity = res.porosity;
         info.voids = res.voids;
+        info.cut = res.cut;
       }
       r.finish();
       info.x0 = bx0; info.x1 = bx1; info.y0 = by0; info.y1 = by1;
@@ -398,6 +423,21 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     if (s.solver.contact && s.bodies.size() != 2)
       throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
                       "field; this case has " + std::to_string(s.bodies.size()) + " bodies");
+    // [contact] void faces: the two faces of each void in separate velocity fields, welded
+    // where they meet (kern::grid_contact), so that gaps narrower than a cell close
+    std::vector<Void> voids;
+    for (const auto& b : s.bodies) voids.insert(voids.end(), b.cut.begin(), b.cut.end());
+    if (s.solver.void_faces == VoidFaces::Separate) {
+      if (voids.empty())
+        throw CaseError("case key 'contact.void_faces': 'separate' needs a body with voids ([bodies.voids]); this case has none");
+      if (s.solver.contact)
+        throw CaseError("case key 'contact.void_faces': 'separate' and contact.mode = 'multi_field' would need four velocity "
+                        "fields (not implemented); use a symmetric case with one field per side, or void_faces = 'single_field'");
+      if (s.solver.scheme != Scheme::USL)
+        throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
+      assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
+                        s.geom.periodic_x ? s.geom.length_x() : 0.0);
+    }
   }
   for (std::size_t b = 0; b < s.bodies.size(); ++b)
     if (s.bodies[b].name == "target") s.target = b;

@@ -9,6 +9,7 @@
 #include "engine/diagnostics.hpp"
 #include "engine/material.hpp"
 #include "engine/particles.hpp"
+#include "engine/porous.hpp"
 #include "engine/simulation.hpp"
 
 namespace smpm {
@@ -31,6 +32,7 @@ struct BodyInfo {
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bounding rectangle [m]
   double porosity = 0.0;  // fraction of the dense body's points removed by voids
   long voids = 0;
+  std::vector<Void> cut;  // its voids (a mirror copy: their mirror images)
 };
 
 struct Scene {

@@ -22,7 +22,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       materials_(std::move(materials)),
       body_material_(std::move(body_material)),
       P_(std::move(particles)),
-      grid_(geom, cfg.transfer == Transfer::FLIP, cfg.contact ? 2 : 1) {
+      grid_(geom, cfg.transfer == Transfer::FLIP, cfg.fields()) {
   if (geom.tile < 4 || geom.tile > kern::kMaxTile)
     throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
   const std::size_t n = P_.size();
@@ -32,9 +32,15 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       throw std::invalid_argument("multi-body contact needs exactly two bodies (one velocity field each), got " +
                                   std::to_string(body_material_.size()));
     if (cfg_.scheme != Scheme::USL) throw std::invalid_argument("multi-body contact runs with scheme 'usl' only");
-    body_field_.fill(0);
-    body_field_[1] = 1;
+    P_.field.resize(n);
+    for (std::size_t i = 0; i < n; ++i) P_.field[i] = P_.body[i] == 1 ? 1 : 0;
   }
+  if (cfg_.void_faces == VoidFaces::Separate) {
+    if (cfg_.contact) throw std::invalid_argument("separated void faces and two-body contact together need four velocity fields (not implemented)");
+    if (cfg_.scheme != Scheme::USL) throw std::invalid_argument("separated void faces run with scheme 'usl' only");
+    if (P_.field.size() != n) throw std::invalid_argument("separated void faces: the particles carry no field (assign_void_sides)");
+  }
+  if (cfg_.fields() == 1) std::vector<std::uint8_t>().swap(P_.field);
   // optional fields: only what the materials and solver settings need
   bool energy = false, plastic = false, stored_work = false;
   for (const auto& m : materials_) {
@@ -46,6 +52,10 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
+  if (cfg_.strain_rate == StrainRate::Auto)
+    midstep_ = cfg_.scheme == Scheme::USL && cfg_.transfer == Transfer::APIC && !P_.e.empty();
+  else
+    midstep_ = cfg_.strain_rate == StrainRate::Midstep && cfg_.scheme == Scheme::USL;
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);
@@ -97,10 +107,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
 
 kern::ParticleView Simulation::pview() {
   auto v = P_.view();
-  if (cfg_.contact) {
-    v.body = P_.body.data();
-    v.body_field = body_field_.data();
-  }
+  if (cfg_.fields() > 1) v.field_of = P_.field.data();
   return v;
 }
 
@@ -156,7 +163,7 @@ void Simulation::scatter_to_grid() {
   for (int f = 0; f < a.G.fields; ++f) {
     const auto F = a.G.field(f);
     double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.gmx, F.gmy, F.vol};
-    kern::fold_periodic(a.g, box_, arrays, cfg_.contact ? 8 : 5);
+    kern::fold_periodic(a.g, box_, arrays, cfg_.fields() > 1 ? 8 : 5);
   }
 }
 
@@ -170,7 +177,7 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
-  q.scatter_velocity = transfer_heat();  // the heating gather reads p / m
+  q.scatter_velocity = cfg_.transfer == Transfer::APIC;  // the gather reads p / m (kern::g2p_particle)
   {
     Timed t(times_.grid);
     WallForces w;
@@ -186,18 +193,21 @@ void Simulation::update_grid() {
     }
     wall_ = w;
   }
-  if (cfg_.contact) {
+  if (cfg_.fields() > 1) {
     Timed t(times_.contact);
-    kern::grid_contact(g, box_, G, q, kern::ContactParams{cfg_.friction, cfg_.contact_volume_fraction});
+    const bool weld = cfg_.void_faces == VoidFaces::Separate;
+    kern::ContactParams c{cfg_.friction, weld, weld ? cfg_.void_face_volume_fraction : cfg_.contact_volume_fraction,
+                          midstep_};
+    kern::grid_contact(g, box_, G, q, c);
   }
   Timed t(times_.grid);
   for (int f = 0; f < G.fields; ++f) {
     const auto F = G.field(f);
     double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
     kern::fill_periodic_ghosts(g, box_, arrays, q.flip ? 4 : 2);
-    if (transfer_heat()) {  // the heating gather reads the scatter's velocity
-      double* scatter[] = {F.px, F.py};
-      kern::fill_periodic_ghosts(g, box_, scatter, 2);
+    if (q.scatter_velocity) {  // the gather reads the scatter's velocity (and contact heat)
+      double* scatter[] = {F.px, F.py, F.heat};
+      kern::fill_periodic_ghosts(g, box_, scatter, G.fields > 1 ? 3 : 2);
     }
   }
 }
@@ -222,6 +232,7 @@ auto Simulation::stress_pass(double& thread0_seconds) {
     const bool spall = materials_[k].spall_strength > 0.0;
     q.p_min = spall ? -materials_[k].spall_strength : -1e300;
     q.rho_min = spall ? 0.5 * materials_[k].rho0 : 0.0;
+    q.midstep = midstep_;
   }
   return [this, pv = P_.view(), state, params = std::move(params), &thread0_seconds](
              std::size_t first, std::size_t last, const kern::Gradient& L, kern::ConstitutiveResult& acc) {
@@ -241,7 +252,7 @@ void Simulation::gather_from_grid() {
   const auto stress = stress_pass(stress_seconds);
   const auto a = transfer_args();
   const auto& g = a.g;
-  kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha};
+  kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha, midstep_ ? 0.5 : 0.0};
   // walls: the largest double below the far edge keeps a clamped point inside the grid
   using kern::Wall;
   if (cfg_.walls.left != Wall::None) q.xmin = g.x0;

@@ -21,6 +21,15 @@ struct StepArgs;
 }
 
 enum class Transfer { APIC, FLIP };
+// Void faces of a porous body: one velocity field (faces closer than about a cell share
+// nodes and stop approaching), or two, by the side of the nearest void each point lies on
+// (Particles::field), welded where they fill a node (kern::grid_contact).
+enum class VoidFaces { SingleField, Separate };
+// Velocity of the USL strain rate: the node's mid-step velocity (energy-conserving step, not
+// symplectic: needs the damping of APIC or viscosity) or the updated one (symplectic, loses
+// dt^2 |f|^2 / 2m per node and step). Auto: mid-step with APIC, USL and an energy field (shock
+// runs), else updated (kern::g2p_particle, docs/method.md "Energy").
+enum class StrainRate { Auto, Midstep, Updated };
 // USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
 // updated particles.
 enum class Scheme { USL, MUSL };
@@ -31,6 +40,7 @@ struct SolverConfig {
   Transfer transfer = Transfer::APIC;
   double flip_alpha = 0.99;     // FLIP fraction of the FLIP/PIC blend (FLIP transfer only)
   Scheme scheme = Scheme::USL;
+  StrainRate strain_rate = StrainRate::Auto;
   double cfl = 0.4;             // dt = cfl h / max_p(c_p + |v_p|)
   double fixed_dt = 0.0;        // [s]; > 0 replaces the CFL time step
   int permute_every = 20;       // physical permutation of particle arrays every k steps (0: never)
@@ -48,6 +58,9 @@ struct SolverConfig {
   bool contact = false;
   double friction = 0.0;                 // Coulomb mu
   double contact_volume_fraction = 1.0;  // nodal volume (in cells) needed for contact
+  VoidFaces void_faces = VoidFaces::SingleField;
+  double void_face_volume_fraction = 0.8;  // nodal volume (in cells) at which the faces weld (docs/method.md)
+  int fields() const { return contact || void_faces == VoidFaces::Separate ? 2 : 1; }
 };
 
 // A step that cannot go on: a particle left the grid or its volume became non-positive.
@@ -130,6 +143,13 @@ class Simulation {
   // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
   // (see kern::g2p_particle), so total energy is conserved by the transfers.
   bool transfer_heat() const { return cfg_.transfer == Transfer::APIC && !P_.e.empty(); }
+  // USL strain rate from the mid-step grid velocity (StrainRate, resolved in the constructor)
+  bool midstep_ = false;
+
+ public:
+  bool midstep() const { return midstep_; }
+
+ private:
   std::string describe_particle(std::size_t p) const;
 
   SolverConfig cfg_;
@@ -147,7 +167,6 @@ class Simulation {
   std::vector<std::uint8_t> scratch_b_;
   std::vector<double> row_force_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
-  std::array<std::uint8_t, 256> body_field_{};          // contact: velocity field of each body
 
   // heat conduction
   std::vector<Thermo> thermo_;

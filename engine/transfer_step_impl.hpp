@@ -13,7 +13,7 @@ void scatter(const StepArgs& a) {
   kern::clear_grid(a.g, a.box, a.G, true);
   const bool apic = a.cfg.transfer == Transfer::APIC;
   const double lp = a.cfg.ugimp_lp;
-  if (a.cfg.contact) {
+  if (a.cfg.fields() > 1) {
     if (apic) kern::p2g_colored<S, true, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
     else kern::p2g_colored<S, false, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
   } else {
@@ -32,13 +32,13 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   const std::size_t n = a.n;
   const bool flip = a.cfg.transfer == Transfer::FLIP;
   if (a.cfg.scheme == Scheme::USL) {
-    auto usl = [&](auto contact) {  // contact: each body reads its own velocity field
+    auto usl = [&](auto contact) {  // contact: each particle reads its own velocity field
       constexpr bool C = decltype(contact)::value;
       if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
       if (a.heat) return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
       return kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
     };
-    return a.cfg.contact ? usl(std::true_type{}) : usl(std::false_type{});
+    return a.cfg.fields() > 1 ? usl(std::true_type{}) : usl(std::false_type{});
   }
   // MUSL: new particle velocities, remap their momentum to the grid, then move the particles
   // and take the velocity gradient from the remapped grid velocity.

@@ -23,8 +23,13 @@ struct GridUpdateParams {
   double mass_eps = 0.0;
   Walls walls;
   bool flip = false;      // also store dv = v_new - v_old
-  // Replace the momenta px, py by the scatter's velocity p / m (0 on empty nodes): the APIC
-  // heating gather reads it (kernels/transfer.hpp), and reads one array less, with no division.
+  // Replace the momenta px, py by the scatter's velocity p / m with the walls applied (0 on
+  // empty nodes): the APIC gather reads it for the mid-step velocity of L and for the transfer
+  // heating (kernels/transfer.hpp), with no division. The walls' share: a wall node's normal
+  // velocity p_n / m, zeroed here, is kinetic energy 1/2 p_n^2 / m that the wall takes out of
+  // the grid; measured against the constrained velocity, the heating gather's scatter loss
+  // counts it (the cross term of the least-squares split vanishes), so it heats the points at
+  // the wall instead of vanishing.
   bool scatter_velocity = false;
 };
 
@@ -39,23 +44,29 @@ inline constexpr int kRowSlots = 4;
 void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
                  double* row_force);
 
-// Multi-body contact between two velocity fields (Bardenhagen et al. 2001). After each field's
-// own update (grid_update on G.field(f)), at every node where both fields carry mass and
-// sum_f V_f >= volume_fraction h^2:
+// Contact between two velocity fields (Bardenhagen et al. 2001). After each field's own update
+// (grid_update on G.field(f)), at every node where both fields carry mass and
+// sum_f V_f >= volume_fraction h^2 (the fields fill the node's cell: they touch there):
+//   weld (separated void faces of one body): both fields take the centre-of-mass velocity, as
+//   the single field would; else (two bodies):
 //   n = (g_1 - g_0) / |...|, g_f = sum_p m_p grad N_i(x_p) the outward normal of field f
 //   (n points from body 1 into body 0)
 //   v_cm = (m_0 v_0 + m_1 v_1) / (m_0 + m_1),  d = v_0 - v_cm
 //   approaching (d . n < 0): the normal part of d is removed; the tangential part t is
 //   removed too when |t| <= mu |d . n| (stick), else reduced by mu |d . n| (Coulomb slip);
 //   v_1 follows from momentum conservation. Separating fields (d . n >= 0) move freely.
-// Walls are applied again to the corrected velocities.
+// Walls are applied again to the corrected velocities. The kinetic energy a node loses, per
+// unit of its mass, goes to G.heat (both fields' slots; 0 where nothing changed), which the
+// heating gather adds to the particles' internal energy (kern::g2p_particle).
 struct ContactParams {
   double friction = 0.0;         // Coulomb coefficient mu
+  bool weld = false;             // weld, not Coulomb contact
   // Nodal volume sum_f sum_p w V_p needed for contact, in cells. 1: the bodies fill the node's
   // cell, i.e. they touch there. Below 1, nodes at a body's corner or a thin gap count as
   // contact and plough: a block sliding at 1 m/s on a frictionless floor lost 17 % of its speed
   // at 0.9 and was kicked up; at 1 nothing (docs/verification.md).
   double volume_fraction = 1.0;
+  bool midstep = false;  // the gather's L takes the mid-step velocity (kern::G2PParams::mid)
 };
 void grid_contact(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
                   const ContactParams& c);

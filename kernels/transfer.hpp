@@ -262,6 +262,9 @@ struct G2PParams {
   double dt = 0.0;
   double lp = 0.25;          // uGIMP half particle width, grid units
   double flip_alpha = 0.0;   // FLIP fraction (FLIP transfers only)
+  // USL pass: L from v_new - mid (v_new - v_old): 0.5 the mid-step velocity, 0 the updated one
+  // (see g2p_particle)
+  double mid = 0.0;
   // Rigid walls are impenetrable: a point moved past one is put back on it. (With B-splines a
   // point in the first cell also feels nodes inside the material and can overshoot the wall
   // by a fraction of dt |v|.) -inf / +inf where there is no wall.
@@ -269,7 +272,18 @@ struct G2PParams {
 };
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
-// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T.
+// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T,
+// in the USL pass (Full) with q.mid = 0.5 from the node's mid-step velocity
+// v_i = (v_i^old + v_i^new) / 2 (APIC: px, py hold v^old, the grid update's scatter_velocity;
+// FLIP: v^new - dv / 2). The grid's kinetic energy changes by exactly dt f_i . (v^old + v^new) / 2
+// in the explicit update, and the constitutive update's work dt V sigma : D with the stress that
+// made f_i (kern::constitutive_range, mid-step energy) is then exactly its negative: the step
+// conserves energy node by node, partly filled nodes at void faces and free surfaces included
+// (with L from v^new the step loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small).
+// The mid-step strain rate with forces from the old stress is not symplectic: an undamped mode
+// of frequency w grows by about (w dt)^2 / 2 per step. APIC's transfers damp grid-scale modes
+// and shock runs carry viscosity; FLIP and elastic runs take the updated velocity (q.mid = 0):
+// the engine chooses (SolverConfig::midstep, docs/method.md "Energy").
 //
 // Heat (APIC only): both transfers dissipate kinetic energy, and both losses split exactly
 // into per-particle shares (the kinetic energy of a particle counts its affine field,
@@ -278,7 +292,9 @@ struct G2PParams {
 //   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
 // both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
-// error is what remains. Needs the scatter's velocity p / m in px, py (the grid update's
+// error is what remains. With several velocity fields (Contact) the contact step's loss is
+// added too: sum_i w_ip q_i, q_i = the kinetic energy removed at node i per unit of its total
+// mass (kern::grid_contact), whose shares over the particles of both fields sum to the loss. Needs the scatter's velocity p / m in px, py (the grid update's
 // scatter_velocity, ghosts filled).
 //
 // PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
@@ -297,16 +313,19 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
+  constexpr bool kMid = What == G2PWhat::Full;  // USL: L from the mid-step velocity
+  double axx = 0, axy = 0, ayx = 0, ayy = 0;   // sum v_new grad w^T (APIC C of the linear hat)
   static_assert(!Heat || kAffine, "transfer heating is defined for the APIC velocity gather");
   double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
+  double qc = 0;          // sum w q_i: the contact step's dissipation (several fields)
   double ux = 0, uy = 0, uxx = 0, uxy = 0, uyx = 0, uyy = 0;  // old v_p and C_p h
   if constexpr (Heat) {
     ux = P.vx[p]; uy = P.vy[p];
     uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
   }
-  // with Contact the view always carries body_field (Simulation::pview): the lookup without
+  // with Contact the view always carries field_of (Simulation::pview): the lookup without
   // field()'s null test vectorizes
-  const std::size_t foff = Contact ? static_cast<std::size_t>(P.body_field[P.body[p]]) * G.fstride : 0;
+  const std::size_t foff = Contact ? static_cast<std::size_t>(P.field_of[p]) * G.fstride : 0;
 #pragma GCC unroll 4
   for (int b = 0; b < N; ++b) {
     const std::size_t row = g.node(bx, by + b) + foff;
@@ -316,6 +335,18 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       const std::size_t n = row + a;
       const double w = wx[a] * wy[b];
       const double gvx = PureFlip ? 0.0 : G.vx[n], gvy = PureFlip ? 0.0 : G.vy[n];
+      // USL: L from the mid-step velocity (v_old + v_new) / 2 of the node, v_old the scatter's
+      // velocity after the walls (see the comment above)
+      double lvx = gvx, lvy = gvy;
+      if constexpr (kMid) {
+        if constexpr (FLIP) {
+          lvx = gvx - q.mid * G.dvx[n];
+          lvy = gvy - q.mid * G.dvy[n];
+        } else {
+          lvx = gvx - q.mid * (gvx - G.px[n]);
+          lvy = gvy - q.mid * (gvy - G.py[n]);
+        }
+      }
       if constexpr (!PureFlip) {
         vx += w * gvx;
         vy += w * gvy;
@@ -326,6 +357,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
         const double rx = ux + uxx * dx + uxy * dy - G.px[n];
         const double ry = uy + uyx * dx + uyy * dy - G.py[n];
         r2 += w * (rx * rx + ry * ry);
+        if constexpr (Contact) qc += w * G.heat[n];
       }
       if constexpr (FLIP && What != G2PWhat::PositionGradient) {
         dvx += w * G.dvx[n];
@@ -333,8 +365,12 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       }
       if constexpr (kGrad) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
-        lxx += gvx * gx; lxy += gvx * gy;
-        lyx += gvy * gx; lyy += gvy * gy;
+        lxx += lvx * gx; lxy += lvx * gy;
+        lyx += lvy * gx; lyy += lvy * gy;
+        if constexpr (kMid && kAffine && Shape::apic_gradient) {
+          axx += gvx * gx; axy += gvx * gy;
+          ayx += gvy * gx; ayy += gvy * gy;
+        }
       }
       if constexpr (kAffine && !Shape::apic_gradient) {
         const double dx = (bx + a) - xg;
@@ -355,7 +391,9 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       }
     }
     double cxx, cxy, cyx, cyy;  // C in grid units
-    if constexpr (Shape::apic_gradient) {
+    if constexpr (Shape::apic_gradient && kMid) {
+      cxx = axx; cxy = axy; cyx = ayx; cyy = ayy;
+    } else if constexpr (Shape::apic_gradient) {
       cxx = lxx; cxy = lxy; cyx = lyx; cyy = lyy;
     } else {
       cxx = bxx / Dx; cxy = bxy / Dy; cyx = byx / Dx; cyy = byy / Dy;
@@ -364,7 +402,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     P.Cyx[p] = cyx * inv_h; P.Cyy[p] = cyy * inv_h;
     if constexpr (Heat) {
       const double affine = (cxx * cxx + cyx * cyx) * Dx + (cxy * cxy + cyy * cyy) * Dy;
-      P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine);
+      P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine) + qc;
     }
   }
   if constexpr (What != G2PWhat::PositionGradient) {

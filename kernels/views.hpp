@@ -63,15 +63,18 @@ struct GridView {
   double* fx; double* fy;  // force [N/m]
   double* vx; double* vy;  // updated velocity (after forces and boundary conditions)
   double* dvx; double* dvy;  // v_new - v_old, for FLIP (may be null when unused)
-  // contact only (null otherwise): mass gradient sum_p m_p grad w_ip [kg/m^2], volume sum w V
-  double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr;
+  // several fields only (null otherwise): mass gradient sum_p m_p grad w_ip [kg/m^2], volume
+  // sum w V [m^2], and the kinetic energy the contact step dissipated at the node per unit of
+  // the node's total mass [J/kg] (the same value in every field's slot), which the heating
+  // gather hands to the particles (kern::grid_contact, kern::g2p_particle)
+  double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr; double* heat = nullptr;
   std::size_t fstride = 0;  // num_nodes() with two fields, 0 with one
   int fields = 1;
   // The view of field f alone (a one-field view into the same storage).
   GridView field(int f) const {
     GridView v = *this;
     const std::size_t o = static_cast<std::size_t>(f) * fstride;
-    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol})
+    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol, &v.heat})
       if (*a) *a += o;
     v.fstride = 0;
     v.fields = 1;
@@ -95,10 +98,10 @@ struct ParticleView {
   const double* q;
   // Specific internal energy (null when not tracked), heated by the APIC transfer dissipation.
   double* e;
-  // Multi-body contact: velocity field of each particle, body_field[body[p]] (null: one field).
-  const std::uint8_t* body = nullptr;
-  const std::uint8_t* body_field = nullptr;
-  std::size_t field(std::size_t p) const { return body_field ? body_field[body[p]] : 0; }
+  // Several velocity fields (two-body contact, separated void faces): the field of each
+  // particle, Particles::field (null: one field).
+  const std::uint8_t* field_of = nullptr;
+  std::size_t field(std::size_t p) const { return field_of ? field_of[p] : 0; }
 };
 
 // The calling thread's share [begin, end) of n items in an omp parallel region: contiguous
