@@ -106,8 +106,9 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
   return out;
 }
 
-double open_area(const Particles& P, std::uint8_t body, double x0, double x1, double y0, double y1, double pixel,
-                 double radius, double period, double xp0) {
+std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
+                              double pixel, double radius, double period, double xp0) {
+  std::vector<double> area(windows.size(), 0.0);
   double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300, smax = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
@@ -115,7 +116,7 @@ double open_area(const Particles& P, std::uint8_t body, double x0, double x1, do
     by0 = std::min(by0, P.y[p]); by1 = std::max(by1, P.y[p]);
     smax = std::max(smax, std::sqrt(P.V[p]));
   }
-  if (bx1 < bx0 || !(pixel > 0.0)) return 0.0;
+  if (bx1 < bx0 || !(pixel > 0.0)) return area;
   const bool wrap = period > 0.0;
   const double pad = 2.0 * pixel + smax;
   if (wrap) {
@@ -179,13 +180,15 @@ double open_area(const Particles& P, std::uint8_t body, double x0, double x1, do
       if (i < nx - 1) seed(i + 1, j);
     }
   }
-  double area = 0.0;
   for (long j = 0; j < ny; ++j) {
     const double yc = by0 + (j + 0.5) * pixel;
-    if (yc < y0 || yc > y1) continue;
     for (long i = 0; i < nx; ++i) {
+      if (img[static_cast<std::size_t>(j * nx + i)] != 0) continue;
       const double xc = bx0 + (i + 0.5) * px;
-      if (img[static_cast<std::size_t>(j * nx + i)] == 0 && xc >= x0 && xc <= x1) area += px * pixel;
+      for (std::size_t w = 0; w < windows.size(); ++w) {
+        const Window& W = windows[w];
+        if (yc >= W.y0 && yc <= W.y1 && xc >= W.x0 && xc <= W.x1) area[w] += px * pixel;
+      }
     }
   }
   return area;

@@ -19,15 +19,19 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
                       bool from_top);
 
 // Void area left open in one body [m^2] inside the window [x0, x1] x [y0, y1] (current
-// configuration): each of the body's points covers a disk of radius `radius` sqrt(V_p) centred
+// configuration) for each window: each of the body's points covers a disk of radius `radius` sqrt(V_p) centred
 // on it, rasterized on pixels of side `pixel` over the body's bounding box; uncovered pixels
 // connected to the box's border (outside the body: above its free surface, beyond its ends)
 // are not voids; the others are, and those whose centre lies in the window count. period > 0:
 // x wraps with that period (periodic sides; the box then spans the period from xp0). A radius
 // of 0.75 covers a square lattice, sheared or stretched by a third, without gaps: openings
 // narrower than about half the point spacing do not count (voids.csv, tests/test_porous.cpp).
-double open_area(const Particles& P, std::uint8_t body, double x0, double x1, double y0, double y1, double pixel,
-                 double radius, double period = 0.0, double xp0 = 0.0);
+// One rasterization serves every window: the result holds one area per window.
+struct Window {
+  double x0, x1, y0, y1;  // [m]
+};
+std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
+                              double pixel, double radius, double period = 0.0, double xp0 = 0.0);
 
 // Temperature of particle p [K] (T0 where the particle carries no energy); the stored share
 // (1 - heat_fraction) of its plastic work does not count as heat.

@@ -237,15 +237,17 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     if (!voids.is_open()) return;
     Timed t(s.diagnostics_seconds);
     const auto& g = scene.geom;
-    const double pixel = std::sqrt(scene.bodies[target].area / double(scene.bodies[target].particles)) / 4;  // [m]
+    const double pixel = std::sqrt(scene.bodies[target].area / double(scene.bodies[target].particles)) / 3;  // [m]
     const double period = g.periodic_x ? g.length_x() : 0.0, x1 = g.x0 + g.length_x();
     const auto b = static_cast<std::uint8_t>(target);
-    const double all = open_area(sim.particles(), b, g.x0, x1, -1e300, 1e300, pixel, 0.75, period, g.x0);
-    voids << sim.time() * 1e9 << ",target," << all * 1e12 << ",nan\n";
-    for (const auto& r : scene.regions) {
+    std::vector<Window> win{{g.x0, x1, -1e300, 1e300}};
+    for (const auto& r : scene.regions) win.push_back({g.x0, x1, r.y0, r.y1});
+    const auto a = open_area(sim.particles(), b, win, pixel, 0.75, period, g.x0);
+    voids << sim.time() * 1e9 << ",target," << a[0] * 1e12 << ",nan\n";
+    for (std::size_t k = 0; k < scene.regions.size(); ++k) {
+      const auto& r = scene.regions[k];
       if (r.body != b) continue;
-      const double a = open_area(sim.particles(), b, g.x0, x1, r.y0, r.y1, pixel, 0.75, period, g.x0);
-      voids << sim.time() * 1e9 << ',' << r.name << ',' << a * 1e12 << ',' << a / ((r.y1 - r.y0) * g.length_x()) << '\n';
+      voids << sim.time() * 1e9 << ',' << r.name << ',' << a[k + 1] * 1e12 << ',' << a[k + 1] / ((r.y1 - r.y0) * g.length_x()) << '\n';
     }
     voids.flush();
   };

@@ -203,7 +203,7 @@ struct ConstitutiveResult {
 // tests/test_elastic.cpp, "determinism").
 //
 // Points [first, last) on the calling thread; L.xx[i] ... is the gradient of point first + i.
-template <bool Selective, bool HasE, bool HasQ, bool HasWp, class Eos, class Strength>
+template <bool Selective, bool HasE, bool HasQ, bool HasWp, bool Midstep, class Eos, class Strength>
 ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
                                       std::size_t first, std::size_t last, const ConstitutiveParams& q,
                                       const Eos& eos, const Strength& str, Selection sel) {
@@ -212,7 +212,6 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(cnt);
   const double dt = q.dt, l = q.av_length, p_min = q.p_min, rho_min = q.rho_min;
   const double cQ = q.av_quadratic, cL = q.av_linear;
-  const bool midstep = q.midstep;
   // a fractured point's signal speed: the sound speed at rest (its stress is zero)
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
   // every array through a local restrict pointer to the range's first point: the view's
@@ -268,9 +267,12 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
       // second order in dt but left the energy of the step unbalanced by O(dt^2) per node; at
       // partly filled nodes of void faces that was a 4-10 % loss over a porous run.) A point
       // that fractures takes the work of the stress it had, this same one.
-      const double q0 = HasQ ? qp[p] : 0.0, e_old = ep[p], cold = eos.cold(rho);
-      const double sD = a0 * lxx + b0 * lyy + 2.0 * c0 * dxy - (P0 + q0) * trD;
-      const double e_mid = e_old + dt * V0 * sD / m;
+      const double e_old = ep[p], cold = eos.cold(rho);
+      if constexpr (Midstep) {
+        const double q0 = HasQ ? qp[p] : 0.0;
+        const double sD = a0 * lxx + b0 * lyy + 2.0 * c0 * dxy - (P0 + q0) * trD;
+        e = e_old + dt * V0 * sD / m;
+      } else {
       // updated-velocity L (q.midstep false): deviatoric work with the time-centred stress and
       // mid-step volume, pressure work with P at mid-step, solved exactly (P is linear in e:
       // P = cold(rho) + Gamma rho e, Gamma rho constant); a point that fractures takes the
@@ -282,7 +284,8 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
       const double sD_fr = 0.5 * (a0 * lxx + b0 * lyy + 2.0 * c0 * dxy);
       const double e_fr = e_old + (dt * 0.5 * (V0 + V) * sD_fr - 0.5 * P0 * dV) / m;
       const bool fr = (cold + eos.gamma_rho() * e_c < p_min) | (rho < rho_min);
-      e = midstep ? e_mid : (fr ? e_fr : e_c);
+      e = fr ? e_fr : e_c;
+      }
       Pn = cold + eos.gamma_rho() * e;
     } else {
       Pn = eos.pressure(rho, 0.0);
@@ -327,10 +330,18 @@ ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveS
   using F = std::false_type;
   auto run = [&](auto Sel, auto E, auto Q) {
     constexpr bool s_ = decltype(Sel)::value, e_ = decltype(E)::value, q_ = decltype(Q)::value;
+    // the mid-step energy update exists only with an energy field
+    auto mid = [&](auto W) {
+      constexpr bool w_ = decltype(W)::value;
+      if constexpr (e_) {
+        if (q.midstep) return constitutive_range<s_, e_, q_, w_, true>(P, S, L, first, last, q, eos, str, sel);
+      }
+      return constitutive_range<s_, e_, q_, w_, false>(P, S, L, first, last, q, eos, str, sel);
+    };
     if constexpr (Strength::plastic) {
-      if (wp) return constitutive_range<s_, e_, q_, true>(P, S, L, first, last, q, eos, str, sel);
+      if (wp) return mid(T{});
     }
-    return constitutive_range<s_, e_, q_, false>(P, S, L, first, last, q, eos, str, sel);
+    return mid(F{});
   };
   auto by_state = [&](auto Sel) {
     if constexpr (!Eos::needs_energy) {

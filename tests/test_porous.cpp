@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "engine/case_reader.hpp"
+#include "engine/diagnostics.hpp"
 #include "engine/porous.hpp"
 #include "engine/scene.hpp"
 #include "engine/simulation.hpp"
@@ -100,8 +101,62 @@ TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verificat
   }
   WARN("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
   CHECK(finite);
-  // Kinetic + internal energy drifts down steadily, by 3.2 % over 100 ns here (the dense
-  // impact: 0.06 %). It does not change with cfl, so it is not the USL step's O(dt) error; its
-  // source is open (docs/verification.md). Bound at 5 %, which the drift stays well inside.
-  CHECK(worst < 0.05);
+  // Kinetic + internal energy: the step conserves it (mid-step strain rate, old-stress work;
+  // the transfers', the welds' and the wall's losses heat the points: docs/method.md, "Energy").
+  // It drifted down 3.2-4.1 % here before; now round-off (measured 1e-12). Bound at 0.5 %,
+  // issue 14's acceptance figure.
+  CHECK(sim.midstep());
+  CHECK(worst < 0.005);
+}
+
+TEST_CASE("void sides: the faces of a void across the impact direction lie in different fields", "[porous]") {
+  Particles P;
+  P.resize(4);
+  // a void of radius 1 at the origin; points above, below, beside it, and one far away
+  const double xs[] = {0.0, 0.0, 1.5, 0.0}, ys[] = {1.2, -1.2, 0.1, 10.0};
+  for (int i = 0; i < 4; ++i) {
+    P.x[i] = xs[i];
+    P.y[i] = ys[i];
+  }
+  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, 0.0, 1.0, 3.0, 0.0);
+  CHECK(int(P.field[0]) == 1);  // above: field 1
+  CHECK(int(P.field[1]) == 0);  // below
+  CHECK(int(P.field[2]) == 1);  // beside, just above the centre
+  CHECK(int(P.field[3]) == 0);  // beyond reach of every void
+  // periodic x: a void across the seam
+  P.x[0] = 9.9;
+  assign_void_sides(P, {{0.1, 0.0, 1.0}}, 0.0, 1.0, 3.0, 10.0);
+  CHECK(int(P.field[0]) == 1);
+}
+
+// Issue 14's single-void acceptance test: a void of radius 10 um in dense Al shocked at
+// 1000 m/s onto the wall, h = 4 um (2 x 2 points per cell), at 20 ns (collapsed by about 13 ns).
+// Open area measured here (pixels of a quarter point spacing): one velocity field 17.0 % of the
+// initial void (the faces stop a cell apart), two fields welded where they meet 3.2 %. What
+// remains is open space between points scattered by the jet, not a cell-wide gap; issue 14's
+// 1 % is not reached (docs/verification.md). Bounds: 8 % and 5 %.
+TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][porous]") {
+  auto run = [](const std::string& mode) {
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/void_collapse.toml");
+    apply_overrides(doc, {"contact.void_faces=\"" + mode + "\""});
+    Scene sc = build_scene(doc, "vc", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    const auto& g = sc.geom;
+    const double pixel = 0.5 * g.h / 4;
+    const std::vector<Window> all{{g.x0, g.x0 + g.length_x(), -1e300, 1e300}};
+    const double A0 = open_area(sc.particles, 0, all, pixel, 0.75, g.length_x(), g.x0)[0];
+    Simulation sim(g, sc.solver, sc.materials, sc.body_material, sc.particles);
+    const double E0 = sim.energy().total();
+    while (sim.time() < 20e-9) sim.step(20e-9 - sim.time());
+    const double A = open_area(sim.particles(), 0, all, pixel, 0.75, g.length_x(), g.x0)[0];
+    const double dE = sim.energy().total() / E0 - 1.0;
+    WARN(mode << ": open area " << A / A0 << " of the initial, energy change " << dE);
+    CHECK(A0 == Approx(M_PI * 9.5e-6 * 9.5e-6).epsilon(0.05));  // the disks reach 0.5 um into it
+    return std::pair{A / A0, dE};
+  };
+  const auto [single, dE1] = run("single_field");
+  const auto [separate, dE2] = run("separate");
+  CHECK(single > 0.08);
+  CHECK(separate < 0.05);  // issue 14 asks for 1 %: not reached, see the comment above
+  CHECK(std::fabs(dE1) < 1e-6);
+  CHECK(std::fabs(dE2) < 1e-6);
 }
