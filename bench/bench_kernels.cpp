@@ -183,7 +183,7 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   kern::compute_keys(g, P.x.data(), P.y.data(), n, s->key.data());
   kern::counting_sort(s->key.data(), n, g.num_keys(), s->hist.data(), s->cell_start.data(), s->order.data());
   s->grid = Grid(g, false);
-  s->row_force.assign(4 * static_cast<std::size_t>(g.sy()), 0.0);
+  s->row_force.assign(kern::kRowSlots * static_cast<std::size_t>(g.sy()), 0.0);
   return s;
 }
 

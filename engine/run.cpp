@@ -311,7 +311,9 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n' << std::flush;
   };
   std::ofstream energy(out / "energy.csv");
-  energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m\n";
+  energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m,"
+            "wall_removed_J_per_m,contact_removed_J_per_m,residual_J_per_m\n";
+  const double E0 = sim.energy().total();
   energy << std::setprecision(12);
   const bool has_wall = scene.solver.walls.bottom != kern::Wall::None;
   std::ofstream wall;
@@ -323,8 +325,11 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     Timed t(s.diagnostics_seconds);
     const auto e = sim.energy();
     const auto q = sim.momentum();
+    const auto& r = sim.removed();
+    // residual: the scheme's own energy error, what is neither in the total nor removed as loss
+    const double lost = sim.removed_is_heat() ? 0.0 : r.wall + r.contact;
     energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
-           << q[1] << '\n' << std::flush;
+           << q[1] << ',' << r.wall << ',' << r.contact << ',' << e.total() + lost - E0 << '\n' << std::flush;
   };
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads);

@@ -63,6 +63,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   cell_start_.resize(geom.num_keys() + 1);
   hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
   row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.sy()), 0.0);
+  row_loss_.assign(static_cast<std::size_t>(geom.sy()), 0.0);
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
@@ -162,8 +163,8 @@ void Simulation::scatter_to_grid() {
   kern::with_shape(cfg_.shape, [&](auto shape) { transfer::scatter<decltype(shape)>(a); });
   for (int f = 0; f < a.G.fields; ++f) {
     const auto F = a.G.field(f);
-    double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.gmx, F.gmy, F.vol};
-    kern::fold_periodic(a.g, box_, arrays, cfg_.fields() > 1 ? 8 : 5);
+    double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.vol, F.gmx, F.gmy};
+    kern::fold_periodic(a.g, box_, arrays, cfg_.contact ? 8 : cfg_.fields() > 1 ? 6 : 5);
   }
 }
 
@@ -189,6 +190,7 @@ void Simulation::update_grid() {
         w.right += rf[1];
         w.bottom += rf[2];
         w.top += rf[3];
+        removed_.wall += rf[4];
       }
     }
     wall_ = w;
@@ -198,7 +200,8 @@ void Simulation::update_grid() {
     const bool weld = cfg_.void_faces == VoidFaces::Separate;
     kern::ContactParams c{cfg_.friction, weld, weld ? cfg_.void_face_volume_fraction : cfg_.contact_volume_fraction,
                           midstep_};
-    kern::grid_contact(g, box_, G, q, c);
+    kern::grid_contact(g, box_, G, q, c, row_loss_.data());
+    for (double r : row_loss_) removed_.contact += r;
   }
   Timed t(times_.grid);
   for (int f = 0; f < G.fields; ++f) {

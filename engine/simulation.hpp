@@ -123,6 +123,14 @@ class Simulation {
     double total() const { return kinetic + internal; }
   };
   Energy energy() const;
+  // Kinetic energy the walls and the contact (welds) took out of the grid's velocities since
+  // the start [J per metre], summed in a fixed order. With APIC and an energy field the
+  // heating gather gives it to the points, so it is part of `internal` already; else it is lost.
+  struct Removed {
+    double wall = 0, contact = 0;
+  };
+  const Removed& removed() const { return removed_; }
+  bool removed_is_heat() const { return transfer_heat(); }
   // Total momentum [kg m/s per metre].
   std::array<double, 2> momentum() const;
   std::size_t bytes() const;
@@ -165,7 +173,8 @@ class Simulation {
   std::vector<double> gather_scratch_;  // L of a block per thread (kern::g2p_blocks), when not stored
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;
-  std::vector<double> row_force_;
+  std::vector<double> row_force_, row_loss_;
+  Removed removed_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it
 
   // heat conduction

@@ -13,9 +13,12 @@ void scatter(const StepArgs& a) {
   kern::clear_grid(a.g, a.box, a.G, true);
   const bool apic = a.cfg.transfer == Transfer::APIC;
   const double lp = a.cfg.ugimp_lp;
-  if (a.cfg.fields() > 1) {
+  if (a.cfg.contact) {  // two bodies: normals from mass gradients
     if (apic) kern::p2g_colored<S, true, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
     else kern::p2g_colored<S, false, P2GWhat::All, true>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+  } else if (a.cfg.fields() > 1) {  // void faces: a weld needs the volume only
+    if (apic) kern::p2g_colored<S, true, P2GWhat::All, true, false>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+    else kern::p2g_colored<S, false, P2GWhat::All, true, false>(a.g, a.G, a.P, a.order, a.cell_start, lp);
   } else {
     if (apic) kern::p2g_colored<S, true, P2GWhat::All>(a.g, a.G, a.P, a.order, a.cell_start, lp);
     else kern::p2g_colored<S, false, P2GWhat::All>(a.g, a.G, a.P, a.order, a.cell_start, lp);

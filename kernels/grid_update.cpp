@@ -57,7 +57,7 @@ void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const G
 #pragma omp parallel for schedule(static)
   for (int j = b.j0; j <= b.j1; ++j) {
     const int r = j + g.pad;
-    double rf[kRowSlots] = {0, 0, 0, 0};
+    double rf[kRowSlots] = {0, 0, 0, 0, 0};
     for (int i = i0; i <= i1; ++i) {
       const std::size_t n = g.node(i, j);
       const double m = G.m[n];
@@ -73,7 +73,9 @@ void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const G
       double vx = ux + acc * (G.fx[n] * inv_m + q.gravity_x);
       double vy = uy + acc * (G.fy[n] * inv_m + q.gravity_y);
       double scratch[4] = {0, 0, 0, 0};
+      const double u2 = ux * ux + uy * uy;
       constrain(g, q.walls, i, j, ux, uy, scratch);
+      rf[4] += 0.5 * m * (u2 - ux * ux - uy * uy);
       if (q.scatter_velocity) {  // after the walls: see GridUpdateParams
         G.px[n] = ux;
         G.py[n] = uy;
@@ -133,13 +135,15 @@ void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all
 }
 
 void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
-                  const ContactParams& c) {
+                  const ContactParams& c, double* row_loss) {
   int i0, i1;
   real_columns(g, box, i0, i1);
   const std::size_t fs = G.fstride;
   const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
+  if (row_loss) std::fill(row_loss, row_loss + g.sy(), 0.0);
 #pragma omp parallel for schedule(static)
   for (int j = box.j0; j <= box.j1; ++j) {
+    double row = 0.0;
     for (int i = i0; i <= i1; ++i) {
       const std::size_t a = g.node(i, j), b = a + fs;
       G.heat[a] = G.heat[b] = 0.0;
@@ -211,6 +215,7 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
         loss -= 0.5 * m * (vxf * vxf + vyf * vyf - uxf * uxf - uyf * uyf) - 0.5 * (jx * (uxf + vxf) + jy * (uyf + vyf));
       }
       G.heat[a] = G.heat[b] = loss / M;
+      row += loss;
       if (q.flip) {
         G.dvx[a] += ux - G.vx[a];
         G.dvy[a] += uy - G.vy[a];
@@ -222,6 +227,7 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
       G.vx[b] = wx;
       G.vy[b] = wy;
     }
+    if (row_loss) row_loss[j + g.pad] = row;
   }
 }
 

@@ -38,9 +38,10 @@ struct GridUpdateParams {
 
 // Reaction of each wall on the material, summed per storage row so that the total is
 // formed in a fixed order (deterministic for any thread count). row_force has kRowSlots * sy()
-// entries per call: [left x, right x, bottom y, top y] per row (0 outside the box); the caller
+// entries per call: [left x, right x, bottom y, top y, kinetic energy the walls removed from
+// the scatter's velocities, 1/2 m |u - u_walls|^2 (J/m)] per row (0 outside the box); the caller
 // sums them.
-inline constexpr int kRowSlots = 4;
+inline constexpr int kRowSlots = 5;
 void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
                  double* row_force);
 
@@ -68,8 +69,9 @@ struct ContactParams {
   double volume_fraction = 1.0;
   bool midstep = false;  // the gather's L takes the mid-step velocity (kern::G2PParams::mid)
 };
+// row_loss (sy() entries, or null): the energy contact removed, summed per storage row.
 void grid_contact(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
-                  const ContactParams& c);
+                  const ContactParams& c, double* row_loss = nullptr);
 
 // MUSL remap: velocity = momentum / mass, walls applied, no forces.
 void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q);

@@ -18,6 +18,7 @@ struct Linear {
   static constexpr int N = 2;
   static constexpr bool apic_gradient = true;
   static constexpr const char* name = "linear";
+  static constexpr bool constant_D = false;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg);
     const double f = xg - b;
@@ -35,6 +36,7 @@ struct UGIMP {
   static constexpr int N = 3;
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "ugimp";
+  static constexpr bool constant_D = false;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   static inline void one(double d, double lp, double& w, double& dw) {
     const double a = std::fabs(d);
     const double s = d < 0.0 ? -1.0 : 1.0;
@@ -69,6 +71,7 @@ struct QuadraticBSpline {
   static constexpr int N = 3;
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "quadratic";
+  static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg - 0.5);
     const double f = xg - b;  // in [0.5, 1.5)
@@ -88,6 +91,7 @@ struct CubicBSpline {
   static constexpr int N = 4;
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "cubic";
+  static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(xg) - 1.0;
     const double f = xg - b;  // in [1, 2)

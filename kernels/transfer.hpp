@@ -59,7 +59,8 @@ inline constexpr int kMaxTile = 16;
 // (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
 inline constexpr int tile_span(int tile) { return tile + 3; }
 
-// K values per node: m, px, py, fx, fy (K = 5); with contact also grad m (2) and volume (K = 8).
+// K values per node: m, px, py, fx, fy (K = 5); with contact also grad m (2) and volume (K = 8),
+// or the volume alone (K = 6, a weld).
 // Velocity fields follow each other, span * span nodes apart.
 template <int K>
 struct TileSink {
@@ -81,11 +82,13 @@ struct TileSink {
     s[K * n + 6] += gmy;
     s[K * n + 7] += vol;
   }
+  inline void add_volume(std::size_t n, double vol) const { s[K * n + 5] += vol; }  // K = 6
 };
 
 // Scatter of one particle p into its velocity field. APIC adds the affine momentum
-// m C (x_i - x_p). Contact also scatters the mass gradient (for normals) and the volume.
-template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false>
+// m C (x_i - x_p). Contact also scatters the volume, and with Normals the mass gradient (the
+// contact normals of two bodies; a weld of void faces needs none).
+template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false, bool Normals = true>
 inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView& P, std::uint32_t p,
                          double lp) {
   constexpr int N = Shape::N;
@@ -127,17 +130,19 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
       if constexpr (What == P2GWhat::All) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
         sink.add_mass_force(n, w * m, vsxx * gx + vsxy * gy, vsxy * gx + vsyy * gy);
-        if constexpr (Contact) sink.add_contact(n, mh * gx, mh * gy, w * Vp);
+        if constexpr (Contact && Normals) sink.add_contact(n, mh * gx, mh * gy, w * Vp);
+        if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
       }
     }
   }
 }
 
 // Scatter of the particles at sorted positions [s0, s1) into a sink.
-template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false>
+template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false, bool Normals = true>
 inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P, const std::uint32_t* order,
                       std::size_t s0, std::size_t s1, double lp) {
-  for (std::size_t s = s0; s < s1; ++s) p2g_particle<Shape, APIC, What, Sink, Contact>(g, sink, P, order[s], lp);
+  for (std::size_t s = s0; s < s1; ++s)
+    p2g_particle<Shape, APIC, What, Sink, Contact, Normals>(g, sink, P, order[s], lp);
 }
 
 // Colored iteration over tiles: tiles of one color (tile parity in x and y) touch disjoint
@@ -212,16 +217,16 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
 
 // Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
 // two velocity fields, with mass gradients and volumes.
-template <class Shape, bool APIC, P2GWhat What, bool Contact = false>
+template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  constexpr int K = Contact ? 8 : 5, F = Contact ? 2 : 1;
+  constexpr int K = Contact ? (Normals ? 8 : 6) : 5, F = Contact ? 2 : 1;
   const std::size_t field_block = static_cast<std::size_t>(K) * tile_span(g.tile) * tile_span(g.tile);
   for_each_tile_colored<K, F>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
-        p2g_range<Shape, APIC, What, TileSink<K>, Contact>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order, s0,
-                                                           s1, lp);
+        p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order,
+                                                                    s0, s1, lp);
       },
       [&](const double* v0, std::size_t n0) {
         for (int f = 0; f < F; ++f) {
@@ -233,11 +238,12 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
             G.m[n] += v[0];
             G.fx[n] += v[3];
             G.fy[n] += v[4];
-            if constexpr (Contact) {
+            if constexpr (Contact && Normals) {
               G.gmx[n] += v[5];
               G.gmy[n] += v[6];
               G.vol[n] += v[7];
             }
+            if constexpr (Contact && !Normals) G.vol[n] += v[5];
           }
         }
       });
@@ -379,6 +385,8 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       }
     }
   }
+  double affine = 0.0;  // sum_ab C_ab^2 D_b at the gather's position [m^2/s^2]
+  double cxx_ = 0, cxy_ = 0, cyx_ = 0, cyy_ = 0;  // C in grid units, for the affine energy after the move
   if constexpr (kAffine) {
     // D = sum_i w_i (x_i - x_p)^2 per axis, grid units (diagonal for tensor-product shapes)
     double Dx = 0, Dy = 0;
@@ -400,8 +408,9 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     }
     P.Cxx[p] = cxx * inv_h; P.Cxy[p] = cxy * inv_h;
     P.Cyx[p] = cyx * inv_h; P.Cyy[p] = cyy * inv_h;
+    cxx_ = cxx; cxy_ = cxy; cyx_ = cyx; cyy_ = cyy;
     if constexpr (Heat) {
-      const double affine = (cxx * cxx + cyx * cyx) * Dx + (cxy * cxy + cyy * cyy) * Dy;
+      affine = (cxx * cxx + cyx * cyx) * Dx + (cxy * cxy + cyy * cyy) * Dy;
       P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine) + qc;
     }
   }
@@ -426,6 +435,22 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     x = x >= g.x0 + L ? x - L : x;
     P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
     P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
+    if constexpr (Heat && !Shape::constant_D && What == G2PWhat::Full) {
+      // D of the linear hat and uGIMP depends on where the point sits in its cell. The affine
+      // kinetic energy the next scatter sees (and Simulation::energy counts) is the one at the
+      // new position: the difference is heat of the move, so total energy still balances
+      double ex[N], ey[N], dex[N], dey[N], Dx = 0, Dy = 0;
+      const double xn = (P.x[p] - g.x0) * inv_h, yn = (P.y[p] - g.y0) * inv_h;
+      const int cx = Shape::eval(xn, q.lp, ex, dex), cy = Shape::eval(yn, q.lp, ey, dey);
+#pragma GCC unroll 4
+      for (int a = 0; a < N; ++a) {
+        const double ux = (cx + a) - xn, uy = (cy + a) - yn;
+        Dx += ex[a] * ux * ux;
+        Dy += ey[a] * uy * uy;
+      }
+      const double after = (cxx_ * cxx_ + cyx_ * cyx_) * Dx + (cxy_ * cxy_ + cyy_ * cyy_) * Dy;
+      P.e[p] += 0.5 * (affine - after);
+    }
     Lout.xx[li] = lxx * inv_h; Lout.xy[li] = lxy * inv_h;
     Lout.yx[li] = lyx * inv_h; Lout.yy[li] = lyy * inv_h;
   }
