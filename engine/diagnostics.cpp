@@ -117,6 +117,10 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
     smax = std::max(smax, std::sqrt(P.V[p]));
   }
   if (bx1 < bx0 || !(pixel > 0.0)) return area;
+  // a point blown up to a huge volume (a failing run's debris) would make the image huge: disks
+  // are capped at 16 pixels of radius, and an image over 4e8 pixels is not drawn (NaN)
+  const double rmax = 16.0 * pixel;
+  smax = std::min(smax, rmax / std::max(radius, 1e-3));
   const bool wrap = period > 0.0;
   const double pad = 2.0 * pixel + smax;
   if (wrap) {
@@ -128,12 +132,17 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
   }
   by0 -= pad;
   by1 += pad;
-  const long nx = std::max(1L, std::lround((bx1 - bx0) / pixel)), ny = static_cast<long>(std::ceil((by1 - by0) / pixel));
-  const double px = (bx1 - bx0) / static_cast<double>(nx);  // pixel width (wrap: the period tiles exactly)
+  const double nxd = std::max(1.0, std::round((bx1 - bx0) / pixel)), nyd = std::ceil((by1 - by0) / pixel);
+  if (!(nxd * nyd <= 4e8)) {
+    std::fill(area.begin(), area.end(), std::numeric_limits<double>::quiet_NaN());
+    return area;
+  }
+  const long nx = static_cast<long>(nxd), ny = static_cast<long>(nyd);
+  const double px = (bx1 - bx0) / nxd;  // pixel width (wrap: the period tiles exactly)
   std::vector<std::uint8_t> img(static_cast<std::size_t>(nx * ny), 0);  // 1 covered, 2 outside
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
-    const double rad = radius * std::sqrt(std::max(P.V[p], 0.0)), r2 = rad * rad;
+    const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
     const long j0 = std::max(0L, static_cast<long>(std::ceil((P.y[p] - rad - by0) / pixel - 0.5)));
     const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.y[p] + rad - by0) / pixel - 0.5)));
     const long i0 = static_cast<long>(std::ceil((P.x[p] - rad - bx0) / px - 0.5));

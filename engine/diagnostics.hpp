@@ -26,6 +26,7 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
 // x wraps with that period (periodic sides; the box then spans the period from xp0). A radius
 // of 0.75 covers a square lattice, sheared or stretched by a third, without gaps: openings
 // narrower than about half the point spacing do not count (voids.csv, tests/test_porous.cpp).
+// Disks are capped at 16 pixels of radius; an image over 4e8 pixels gives NaN areas.
 // One rasterization serves every window: the result holds one area per window.
 struct Window {
   double x0, x1, y0, y1;  // [m]

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <omp.h>
 
+#include <array>
 #include <cmath>
 
 #include "engine/case_reader.hpp"
@@ -159,4 +160,52 @@ TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][p
   CHECK(separate < 0.05);  // issue 14 asks for 1 %: not reached, see the comment above
   CHECK(std::fabs(dE1) < 1e-6);
   CHECK(std::fabs(dE2) < 1e-6);
+}
+
+// Issue 14's energy acceptance beyond the quadratic case: kinetic plus internal energy closes
+// (mid-step strain rate, heat from transfers, welds and the wall) for the cubic B-spline and
+// uGIMP, for voids of radius 2 cells, and for the symmetric two-body collision at +-2000 m/s
+// (no wall: the impact plane is a symmetry plane). Measured over the full 100 ns with the
+// driver: 1e-10 relative or better in each (docs/verification.md); run here for 20 ns.
+TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s", "[verification][porous]") {
+  struct Variant {
+    const char* file;
+    std::vector<std::string> sets;
+  };
+  const Variant variants[] = {
+      {"porous_impact_1000.toml", {"solver.shape=\"cubic\""}},
+      {"porous_impact_1000.toml", {"solver.shape=\"ugimp\""}},
+      {"porous_impact_1000.toml", {"bodies.target.voids.radius_um=4.0"}},
+      {"porous_symmetric_1000.toml", {"bodies.target.velocity_m_s=[0.0, -2000.0]"}},
+  };
+  for (const auto& v : variants) {
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/" + v.file);
+    apply_overrides(doc, v.sets);
+    Scene sc = build_scene(doc, "e", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    REQUIRE(sc.solver.void_faces == VoidFaces::Separate);
+    Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+    const double E0 = sim.energy().total();
+    while (sim.time() < 20e-9) sim.step(20e-9 - sim.time());
+    const double dE = sim.energy().total() / E0 - 1.0;
+    WARN(v.file << " " << v.sets[0] << ": energy change " << dE << ", wall took " << sim.removed().wall
+                << " J/m, welds " << sim.removed().contact << " J/m, all heat");
+    CHECK(sim.midstep());
+    CHECK(std::fabs(dE) < 1e-6);
+  }
+}
+
+TEST_CASE("separated void faces: bitwise the same on 1 and 2 threads", "[porous][determinism]") {
+  auto run = [](int threads) {
+    omp_set_num_threads(threads);
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/void_collapse.toml");
+    Scene sc = build_scene(doc, "vc", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+    while (sim.time() < 15e-9) sim.step(15e-9 - sim.time());
+    const auto e = sim.energy();
+    return std::array<double, 4>{e.kinetic, e.internal, sim.removed().contact, sim.particles().x[17]};
+  };
+  const int before = omp_get_max_threads();
+  const auto a = run(1), b = run(2);
+  omp_set_num_threads(before);
+  for (int k = 0; k < 4; ++k) CHECK(a[k] == b[k]);
 }
