@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds bench_scaling for a machine that has none of the build's packages (the lent 16-core
-# machine): two builds, -march=x86-64-v4 (AVX-512) and -march=x86-64-v3 (AVX2), and every shared
+# Builds bench_scaling (and the driver shockmpm with TARGETS="bench_scaling shockmpm") for a
+# machine that has none of the build's packages (the lent 16-core machine): two builds, -march=x86-64-v4 (AVX-512) and -march=x86-64-v3 (AVX2), and every shared
 # library they load, the loader included, into BUNDLE (default .devbundle, git-ignored).
 # bench/wide_node_device.sh runs it there with the build that the processor supports.
 set -euo pipefail
@@ -11,8 +11,10 @@ for level in v4 v3; do
   B="$ROOT/build-$level"
   cmake -S "$ROOT" -B "$B" -DCMAKE_BUILD_TYPE=Release -DSHOCKMPM_NATIVE=OFF -DSHOCKMPM_BENCH=ON \
     -DCMAKE_CXX_FLAGS="-march=x86-64-$level" > /dev/null
-  cmake --build "$B" -j "$(nproc)" --target bench_scaling
-  cp "$B/bench/bench_scaling" "$BUNDLE/bench_scaling-$level"
+  for t in ${TARGETS:-bench_scaling}; do
+    cmake --build "$B" -j "$(nproc)" --target "$t"
+    if [ "$t" = shockmpm ]; then cp "$B/shockmpm" "$BUNDLE/shockmpm-$level"; else cp "$B/bench/$t" "$BUNDLE/$t-$level"; fi
+  done
 done
 # every library but the kernel's vdso, and the loader itself
 ldd "$BUNDLE/bench_scaling-v4" | awk '/=>/ {print $3} /ld-linux/ {print $1}' | sort -u | while read -r lib; do
