@@ -17,7 +17,9 @@ for level in v4 v3; do
   done
 done
 # every library but the kernel's vdso, and the loader itself
-ldd "$BUNDLE/bench_scaling-v4" | awk '/=>/ {print $3} /ld-linux/ {print $1}' | sort -u | while read -r lib; do
+for bin in "$BUNDLE"/*-v4; do
+  ldd "$bin" | awk '/=>/ {print $3} /ld-linux/ {print $1}'
+done | sort -u | while read -r lib; do
   [ -f "$lib" ] && cp -L "$lib" "$BUNDLE/lib/"
 done
 du -sh "$BUNDLE"

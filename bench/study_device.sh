@@ -33,7 +33,7 @@ wait
 for c in cases/paper/*.toml; do
   name="$(basename "$c" .toml)"
   mkdir -p "$out/$name"
-  for f in run.json series.csv front.csv energy.csv voids.csv case_resolved.toml; do
+  for f in run.json series.csv front.csv energy.csv voids.csv case_resolved.toml; do  # one archive below: the tool returns few files
     [ -f "/tmp/paper/$name/$f" ] && cp "/tmp/paper/$name/$f" "$out/$name/"
   done
   cp "/tmp/paper-$name.log" "$out/$name/log.txt"
