@@ -35,13 +35,15 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   const std::size_t n = a.n;
   const bool flip = a.cfg.transfer == Transfer::FLIP;
   if (a.cfg.scheme == Scheme::USL) {
-    auto usl = [&](auto contact) {  // contact: each particle reads its own velocity field
-      constexpr bool C = decltype(contact)::value;
+    auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
+      constexpr int C = decltype(contact)::value;
       if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
       if (a.heat) return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
       return kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
     };
-    return a.cfg.fields() > 1 ? usl(std::true_type{}) : usl(std::false_type{});
+    if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
+    if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
+    return usl(std::integral_constant<int, 0>{});
   }
   // MUSL: new particle velocities, remap their momentum to the grid, then move the particles
   // and take the velocity gradient from the remapped grid velocity.

@@ -155,6 +155,20 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
       if (c.weld) {
         ux = cx;
         uy = cy;
+        // both fields take the merged scatter velocity too: the heating gather's scatter loss
+        // then counts 1/2 m_f |u_f - u_cm|^2 per field, together the weld's loss
+        // 1/2 mu |u_0 - u_1|^2, and the mid-step L is the single field's (no heat array read)
+        if (q.scatter_velocity) {
+          const double px = (m0 * G.px[a] + m1 * G.px[b]) / M, py = (m0 * G.py[a] + m1 * G.py[b]) / M;
+          const double rx = G.px[a] - G.px[b], ry = G.py[a] - G.py[b];
+          G.px[a] = G.px[b] = px;
+          G.py[a] = G.py[b] = py;
+          const double loss = 0.5 * m0 * m1 / M * (rx * rx + ry * ry);
+          row += loss;
+          G.vx[a] = G.vx[b] = ux;  // (scatter_velocity means APIC: no FLIP increments)
+          G.vy[a] = G.vy[b] = uy;
+          continue;
+        }
       } else {
         // sum_p m_p grad N_i(x_p) points out of each body (mass grows the other way)
         double nx = G.gmx[b] - G.gmx[a], ny = G.gmy[b] - G.gmy[a];

@@ -298,14 +298,17 @@ struct G2PParams {
 //   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
 // both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
 // internal energy, so the transfers conserve total energy and the time integration's O(dt)
-// error is what remains. With several velocity fields (Contact) the contact step's loss is
-// added too: sum_i w_ip q_i, q_i = the kinetic energy removed at node i per unit of its total
-// mass (kern::grid_contact), whose shares over the particles of both fields sum to the loss. Needs the scatter's velocity p / m in px, py (the grid update's
+// error is what remains. Contact: 0 one velocity field, 1 several (each particle reads its own,
+// Particles::field), 2 several with two-body contact, whose loss is added too: sum_i w_ip q_i,
+// q_i = the kinetic energy removed at node i per unit of its total mass (kern::grid_contact),
+// whose shares over the particles of both fields sum to the loss. (A weld of void faces needs
+// no such term: it gives both fields the merged scatter velocity, whose difference to each
+// field's own the scatter loss then counts.) Needs the scatter's velocity p / m in px, py (the grid update's
 // scatter_velocity, ghosts filled).
 //
 // PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
 // the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false, bool PureFlip = false>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0, bool PureFlip = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q, const Gradient& Lout, std::size_t li) {
   static_assert(!PureFlip || (FLIP && What == G2PWhat::Velocity), "PureFlip is the FLIP velocity pass");
@@ -363,7 +366,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
         const double rx = ux + uxx * dx + uxy * dy - G.px[n];
         const double ry = uy + uyx * dx + uyy * dy - G.py[n];
         r2 += w * (rx * rx + ry * ry);
-        if constexpr (Contact) qc += w * G.heat[n];
+        if constexpr (Contact == 2) qc += w * G.heat[n];
       }
       if constexpr (FLIP && What != G2PWhat::PositionGradient) {
         dvx += w * G.dvx[n];
@@ -465,7 +468,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
 // run in the same order, each operation rounded as written (-ffp-contract=off), in the vector
 // body and the remainder: bitwise the same for any thread count (tests/test_contact.cpp,
 // tests/test_elastic.cpp, "determinism").
-template <class Shape, bool FLIP, G2PWhat What, bool Heat, bool Contact, bool PureFlip>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip>
 void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
 #pragma omp parallel
   {
@@ -482,7 +485,7 @@ void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::
 
 // The FLIP velocity pass with flip_alpha = 1 (MUSL, pure FLIP) takes the PureFlip body: the same
 // velocities, up to the sign of a zero.
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, bool Contact = false>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0>
 void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
   if constexpr (FLIP && What == G2PWhat::Velocity && !Heat && !Contact) {
     if (q.flip_alpha == 1.0) return g2p_loop<Shape, FLIP, What, Heat, Contact, true>(g, G, P, n, q);
@@ -506,7 +509,7 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 inline constexpr std::size_t kGatherBlock = 8192;
 inline constexpr std::size_t kGatherScratch = 4 * kGatherBlock;  // doubles per thread
 
-template <class Shape, bool FLIP, G2PWhat What, bool Heat, bool Contact, class Acc, class After>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Acc, class After>
 Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
                double* scratch, After&& after) {
   static_assert(What != G2PWhat::Velocity, "the velocity pass forms no L");
