@@ -33,8 +33,10 @@ wait
 for c in cases/paper/*.toml; do
   name="$(basename "$c" .toml)"
   mkdir -p "$out/$name"
-  for f in run.json series.csv front.csv energy.csv voids.csv case_resolved.toml; do  # one archive below: the tool returns few files
+  for f in run.json series.csv front.csv energy.csv voids.csv case_resolved.toml; do
     [ -f "/tmp/paper/$name/$f" ] && cp "/tmp/paper/$name/$f" "$out/$name/"
   done
   cp "/tmp/paper-$name.log" "$out/$name/log.txt"
 done
+# the device tool returns only a few files: everything in one archive as well
+tar czf "${OUT:-/tmp/out}/paper.tgz" -C "$(dirname "$out")" paper
