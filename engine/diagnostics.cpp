@@ -87,6 +87,9 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       out[r].R2 += gm.R2;
       out[r].D2 += gm.D2;
       out[r].S2 += gm.S2;
+      out[r].R += gm.R;
+      out[r].D += gm.D;
+      out[r].open += P.V[i];
     }
   }
   for (std::size_t r = 0; r < nr; ++r) {
@@ -96,8 +99,12 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       s.R2 /= s.count;
       s.D2 /= s.count;
       s.S2 /= s.count;
+      s.R /= s.count;
+      s.D /= s.count;
     }
-    if (!gradient_current) s.R2 = s.D2 = s.S2 = std::numeric_limits<double>::quiet_NaN();
+    const double area = regions[r].width * (regions[r].y1 - regions[r].y0);
+    s.open = area > 0.0 ? 1.0 - s.open / area : std::numeric_limits<double>::quiet_NaN();
+    if (!gradient_current) s.R2 = s.D2 = s.S2 = s.R = s.D = std::numeric_limits<double>::quiet_NaN();
     s.P = moments(p[r]);
     s.T = moments(T[r]);
     s.rho = moments(rho[r]);

@@ -1,5 +1,6 @@
 // Diagnostics computed from the particle state during a run.
 #pragma once
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -50,10 +51,11 @@ Moments moments(const std::vector<double>& v);
 // plane strain: D_zz = 0).
 struct GradientMeasures {
   double R2, D2, S2;  // [1/s^2]
+  double R, D;        // |curl v|, |div v| [1/s]
 };
 inline GradientMeasures gradient_measures(double lxx, double lxy, double lyx, double lyy) {
   const double curl = lyx - lxy, div = lxx + lyy, dxy = 0.5 * (lxy + lyx);
-  return {curl * curl, div * div, lxx * lxx + lyy * lyy + 2.0 * dxy * dxy};
+  return {curl * curl, div * div, lxx * lxx + lyy * lyy + 2.0 * dxy * dxy, std::fabs(curl), std::fabs(div)};
 }
 
 // A band across the full width, y in [y0, y1] [m], in one body.
@@ -61,6 +63,7 @@ struct Region {
   std::string name;
   double y0 = 0, y1 = 0;
   std::uint8_t body = 0;
+  double width = 0;  // [m] the band's width for its open porosity (0: not defined)
 };
 
 // Statistics of a region's particles (per particle: all points of a body carry the same mass,
@@ -69,6 +72,13 @@ struct RegionStats {
   std::size_t count = 0;
   Moments P, T, rho, Uy;        // [Pa], [K], [kg/m^3], [m/s]
   double R2 = 0, D2 = 0, S2 = 0;  // means [1/s^2]
+  // Mean |curl v| and |div v| [1/s]. Across a captured shock or a one-cell shear layer the mean
+  // squares grow as 1/h (the jump over a width of a few cells), the means of the magnitudes do
+  // not (the jump itself): docs/verification.md, porous strip.
+  double R = 0, D = 0;
+  // 1 - sum V_p / (width (y1 - y0)): the band's area the points' volumes leave open (NaN
+  // without a width); negative where points overlap
+  double open = 0;
 };
 // gradient_current: the particles' L belongs to their current state (Simulation::gradient_current);
 // if not (the last row of an interrupted or failed run), R2, D2 and S2 are NaN, not stale values.

@@ -262,12 +262,13 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   std::ofstream series(out / "series.csv");
   series << "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"
             "Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,T_skew,T_kurt,rho_skew,"
-            "rho_kurt,Uy_skew,Uy_kurt\n"
+            "rho_kurt,Uy_skew,Uy_kurt,R_mean_per_us,D_mean_per_us,open_porosity\n"
          << std::setprecision(8);
   const std::vector<std::string> columns{"time_ns", "region", "count", "P_mean_GPa", "P_std_GPa", "T_mean_K",
                                          "T_std_K", "rho_mean_gcc", "rho_std_gcc", "Uy_mean_ms", "Uy_std_ms",
                                          "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2", "P_skew", "P_kurt",
-                                         "T_skew", "T_kurt", "rho_skew", "rho_kurt", "Uy_skew", "Uy_kurt"};
+                                         "T_skew", "T_kurt", "rho_skew", "rho_kurt", "Uy_skew", "Uy_kurt",
+                                         "R_mean_per_us", "D_mean_per_us", "open_porosity"};
   std::vector<std::vector<double>> table(columns.size());
   std::string region_names;
   for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
@@ -281,7 +282,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       const std::vector<double> row{sim.time() * 1e9, double(r), double(st.count), st.P.mean * 1e-9, st.P.std * 1e-9,
                                     st.T.mean, st.T.std, st.rho.mean * 1e-3, st.rho.std * 1e-3, st.Uy.mean, st.Uy.std,
                                     st.R2 * us2, st.D2 * us2, st.S2 * us2, st.P.skew, st.P.kurt, st.T.skew, st.T.kurt,
-                                    st.rho.skew, st.rho.kurt, st.Uy.skew, st.Uy.kurt};
+                                    st.rho.skew, st.rho.kurt, st.Uy.skew, st.Uy.kurt, st.R * 1e-6, st.D * 1e-6,
+                                    st.open};
       for (std::size_t c = 0; c < row.size(); ++c) {
         table[c].push_back(row[c]);
         if (c == 1) series << ',' << scene.regions[r].name;
@@ -295,7 +297,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     Timed t(s.output_seconds);
     write_table_h5(out / "series.h5", "series", columns, table,
                    {{"regions", region_names}, {"region_column", "index into the regions attribute"},
-                    {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2"}});
+                    {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2, R D 1/us, open_porosity 1"}});
   };
   const double vy0 = scene.bodies[target].vy0;
   std::ofstream front;

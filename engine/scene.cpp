@@ -441,6 +441,8 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
   }
   for (std::size_t b = 0; b < s.bodies.size(); ++b)
     if (s.bodies[b].name == "target") s.target = b;
+  // a band's width for its open porosity: the grid's with periodic sides, else the body's
+  auto band_width = [&](std::size_t b) { return s.geom.periodic_x ? s.geom.length_x() : s.bodies[b].x1 - s.bodies[b].x0; };
   // [[regions]]: bands across the full width, heights measured from the impact plane y = 0
   {
     auto regions = top.tables("regions");
@@ -450,7 +452,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       // inside it and apart (a 400 um target: I 40-360, II 40-240, III 40-120 um)
       const double f = std::clamp(s.bodies[s.target].y1 / 1000e-6, 1e-6, 1.0);
       for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
-        s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target)});
+        s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target), band_width(s.target)});
     }
     for (auto& r : regions) {
       Region g;
@@ -465,6 +467,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         }
       if (!found) throw CaseError("case key '" + r.path() + ".body': no body named '" + body + "'");
       r.finish();
+      g.width = band_width(g.body);
       s.regions.push_back(g);
     }
   }
