@@ -127,6 +127,16 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
                                                 {"T_simple_K", h.T_simple}});
       else
         bt.insert("dense_hugoniot", toml::table{{"beyond_range", true}, {"largest_up_m_s", h.up}});
+      if (b.porosity > 0.0) {
+        // complete compaction: the front a converged porous run approaches (docs/verification.md)
+        const auto c = porous_hugoniot(m, up, b.porosity);
+        if (c.in_range)
+          bt.insert("compacted_hugoniot", toml::table{{"up_m_s", c.up}, {"Us_m_s", c.Us},
+                                                      {"front_speed_wall_frame_m_s", c.Us - c.up}, {"P_Pa", c.P},
+                                                      {"rho_kg_m3", c.rho}, {"e_J_kg", c.e}, {"T_K", c.T}});
+        else
+          bt.insert("compacted_hugoniot", toml::table{{"not_found", true}});
+      }
     }
     bodies.push_back(std::move(bt));
   }
@@ -179,6 +189,12 @@ std::string describe_scene(const Scene& sc) {
     }
     o << "  " << b.name << " stopped from " << up << " m/s (dense Hugoniot): Us " << h.Us << " m/s, P "
       << h.P * 1e-9 << " GPa, rho " << h.rho << " kg/m^3, T " << h.T << " K (T0 + e/cv: " << h.T_simple << " K)\n";
+    if (b.porosity > 0.0) {
+      const auto c = porous_hugoniot(m, up, b.porosity);
+      if (c.in_range)
+        o << "  " << b.name << " fully compacted from porosity " << b.porosity << ": front " << c.Us - c.up
+          << " m/s in the wall frame, P " << c.P * 1e-9 << " GPa, rho " << c.rho << " kg/m^3, T " << c.T << " K\n";
+    }
   }
   o << "memory          " << std::fixed << std::setprecision(1) << sim.bytes() / 1048576.0 << " MiB resident ("
     << std::setprecision(0) << double(sim.particles().bytes()) / std::max<std::size_t>(1, sc.particles.size())

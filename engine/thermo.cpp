@@ -92,4 +92,57 @@ HugoniotState hugoniot(const Material& m, double up) {
   return h;
 }
 
+HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
+  if (m.eos != EosKind::MieGruneisen)
+    throw std::invalid_argument("porous_hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
+  if (!(porosity >= 0.0 && porosity < 1.0)) throw std::invalid_argument("porous_hugoniot: porosity must be in [0, 1)");
+  const auto eos = m.mie_gruneisen();
+  const double rho00 = (1.0 - porosity) * m.rho0, V00 = 1.0 / rho00;
+  // f(rho) = P (V00 - V) - up^2 with P = cold / (1 - gamma_rho (V00 - V) / 2) (e on the Hugoniot)
+  auto pressure = [&](double rho) {
+    const double dV = V00 - 1.0 / rho;
+    return eos.cold(rho) / (1.0 - 0.5 * eos.gamma_rho() * dV);
+  };
+  auto f = [&](double rho) {
+    const double P = pressure(rho);
+    return P > 0.0 ? P * (V00 - 1.0 / rho) - up * up : -up * up;
+  };
+  // scan from full density outwards (denser first, then lighter down to rho00) for a sign change
+  // on the branch P > 0, then bisect
+  HugoniotState h;
+  h.in_range = false;
+  const int n = 4000;
+  auto try_bracket = [&](double a, double b) {
+    if (!(f(a) < 0.0 && f(b) > 0.0) && !(f(a) > 0.0 && f(b) < 0.0)) return false;
+    if (!(pressure(a) > 0.0 && pressure(b) > 0.0)) return false;
+    for (int it = 0; it < 200; ++it) {
+      const double mid = 0.5 * (a + b);
+      ((f(mid) < 0.0) == (f(a) < 0.0) ? a : b) = mid;
+    }
+    h.rho = 0.5 * (a + b);
+    h.in_range = true;
+    return true;
+  };
+  bool found = false;
+  for (int k = 0; k < n && !found; ++k) {  // denser than rho0, up to 4 rho0
+    const double a = m.rho0 * (1.0 + 3.0 * k / n), b = m.rho0 * (1.0 + 3.0 * (k + 1) / n);
+    found = try_bracket(a, b);
+  }
+  for (int k = 0; k < n && !found; ++k) {  // lighter than rho0 (hot), down to rho00
+    const double b = m.rho0 - (m.rho0 - rho00) * k / n, a = m.rho0 - (m.rho0 - rho00) * (k + 1) / n;
+    found = try_bracket(a, b);
+  }
+  if (!found) return h;
+  h.P = pressure(h.rho);
+  h.up = std::sqrt(h.P * (V00 - 1.0 / h.rho));
+  h.Us = h.P / (rho00 * h.up);
+  h.e = 0.5 * h.P * (V00 - 1.0 / h.rho);
+  const Thermo th(m);
+  Material simple = m;
+  simple.temperature = TemperatureKind::Simple;
+  h.T = th.temperature(h.rho, h.e);
+  h.T_simple = Thermo(simple).temperature(h.rho, h.e);
+  return h;
+}
+
 }  // namespace smpm

@@ -46,5 +46,14 @@ struct HugoniotState {
   bool in_range = true;
 };
 HugoniotState hugoniot(const Material& m, double up);
+// The same for a porous body of this porosity fully compacted by the shock: material at rest at
+// (rho00 = (1 - porosity) rho0, P = 0, e = 0) jumps to a void-free state on the EOS,
+// e = P (1/rho00 - 1/rho) / 2 (the P-alpha limit of complete compaction). Us - up is then the
+// compaction front's speed in the frame of a wall that stopped the material. With a large
+// Gruneisen parameter the compacted state is hot enough to lie below rho0 (the porous Hugoniot's
+// anomaly); the root on the branch P > 0 nearest full density is returned. With gamma0 = 2
+// (aluminium) porosity 0.5 is degenerate (P <= 0 everywhere: in_range false); near it the state
+// sits at rho0 and the front is the snowplow speed up rho00 / (rho0 - rho00).
+HugoniotState porous_hugoniot(const Material& m, double up, double porosity);
 
 }  // namespace smpm
