@@ -56,9 +56,11 @@ void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const G
 //   approaching (d . n < 0): the normal part of d is removed; the tangential part t is
 //   removed too when |t| <= mu |d . n| (stick), else reduced by mu |d . n| (Coulomb slip);
 //   v_1 follows from momentum conservation. Separating fields (d . n >= 0) move freely.
-// Walls are applied again to the corrected velocities. The kinetic energy a node loses, per
-// unit of its mass, goes to G.heat (both fields' slots; 0 where nothing changed), which the
-// heating gather adds to the particles' internal energy (kern::g2p_particle).
+// Walls are applied again to the corrected velocities. Coulomb contact: the energy a node loses,
+// per unit of its mass, goes to G.heat (both fields' slots; 0 where nothing changed), which the
+// heating gather adds to the particles' internal energy (kern::g2p_particle). A weld (with the
+// scatter velocity in px, py) gives both fields the merged scatter velocity as well, so that the
+// heating gather's scatter loss counts its loss and G.heat stays 0. row_loss sums either.
 struct ContactParams {
   double friction = 0.0;         // Coulomb coefficient mu
   bool weld = false;             // weld, not Coulomb contact

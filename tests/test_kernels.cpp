@@ -553,3 +553,45 @@ TEST_CASE("last gather pass with the constitutive update block by block: bitwise
     check_fused_pass<Linear, G2PWhat::PositionGradient>(LinearEos{1000.0, 1e6}, ElasticStrength{4e5}, false);
   }
 }
+
+// The weld of separated void faces (grid_contact, weld): at a node the two fields fill, both
+// take the centre-of-mass velocity and the merged scatter velocity; momentum is conserved, the
+// row loss is 1/2 mu |u_0 - u_1|^2 of the scatter velocities, and a node the fields do not fill
+// is left alone.
+TEST_CASE("weld of void faces: centre of mass, merged scatter velocity, loss 1/2 mu du^2", "[contact]") {
+  const GridGeom g = make_geom(false);
+  Grid grid(g, false, 2);
+  auto G = grid.view();
+  const std::size_t full = g.node(3, 4), part = g.node(6, 4), fs = G.fstride;
+  const double h2 = g.h * g.h;
+  // full node: field 0 (m 2, u (1, 0), v (1.5, 0)), field 1 (m 1, u (-2, 1), v (-1, 1)), volume 0.9 h^2
+  G.m[full] = 2; G.m[full + fs] = 1;
+  G.px[full] = 1; G.py[full] = 0; G.px[full + fs] = -2; G.py[full + fs] = 1;  // scatter velocities
+  G.vx[full] = 1.5; G.vy[full] = 0; G.vx[full + fs] = -1; G.vy[full + fs] = 1;
+  G.vol[full] = 0.5 * h2; G.vol[full + fs] = 0.4 * h2;
+  // partly filled node: volume 0.5 h^2, below the threshold
+  G.m[part] = 1; G.m[part + fs] = 1;
+  G.vx[part] = 3; G.vx[part + fs] = -3;
+  G.vol[part] = 0.25 * h2; G.vol[part + fs] = 0.25 * h2;
+  GridUpdateParams q;
+  q.scatter_velocity = true;
+  ContactParams c;
+  c.weld = true;
+  c.volume_fraction = 0.8;
+  c.midstep = true;
+  std::vector<double> loss(static_cast<std::size_t>(g.sy()), 0.0);
+  grid_contact(g, g.all_nodes(), G, q, c, loss.data());
+  CHECK(G.vx[full] == Approx((2 * 1.5 + 1 * -1.0) / 3));
+  CHECK(G.vx[full + fs] == G.vx[full]);
+  CHECK(G.vy[full] == Approx(1.0 / 3));
+  CHECK(G.px[full] == Approx((2 * 1.0 - 2.0) / 3));  // merged scatter velocity
+  CHECK(G.px[full + fs] == G.px[full]);
+  CHECK(G.py[full] == Approx(1.0 / 3));
+  double total = 0;
+  for (double l : loss) total += l;
+  const double mu = 2.0 * 1.0 / 3.0;
+  CHECK(total == Approx(0.5 * mu * (3.0 * 3.0 + 1.0 * 1.0)));
+  CHECK(G.heat[full] == 0.0);
+  CHECK(G.vx[part] == 3.0);
+  CHECK(G.vx[part + fs] == -3.0);
+}
