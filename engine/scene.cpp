@@ -241,6 +241,11 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.solver.void_faces = VoidFaces::Separate;
       s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.8);
       void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
+    } else {
+      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells"})
+        if (r.has(k))
+          throw CaseError(std::string("case key 'contact.") + k + "' applies with contact.void_faces = \"separate\" only; "
+                          "this case has \"single_field\"" + (can ? "" : " (the default here: no voids, two-body contact or MUSL)"));
     }
     r.finish();
   }

@@ -269,3 +269,20 @@ TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
   std::filesystem::remove_all(tmp);
 }
 
+
+TEST_CASE("void-face keys: clear errors", "[case]") {
+  const std::string base = std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/porous_strip.toml";
+  auto build = [&](std::vector<std::string> sets) {
+    auto doc = parse_case_file(base);
+    apply_overrides(doc, sets);
+    return build_scene(doc, "s", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+  };
+  CHECK(build({}).solver.void_faces == VoidFaces::Separate);  // the default with voids
+  CHECK(build({}).solver.void_face_volume_fraction == 0.8);
+  CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_volume_fraction=0.9"}),
+                    Catch::Contains("applies with contact.void_faces = \"separate\" only"));
+  CHECK_THROWS_WITH(build({"contact.void_faces=\"separte\""}), Catch::Contains("'separate', 'single_field'"));
+  CHECK_THROWS_WITH(build({"contact.void_face_volume_fraction=3"}), Catch::Contains("allowed 0.1 to 2"));
+  CHECK_THROWS_WITH(build({"solver.scheme=\"musl\"", "contact.void_faces=\"separate\""}),
+                    Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));
+}
