@@ -1,0 +1,131 @@
+#!/usr/bin/env python3
+"""Speed against error for porous runs: a case at several cell sizes, one table.
+
+Runs the driver on a case (default cases/verify/porous_strip.toml, issue 14's strip) at each cell
+size, then tabulates per run, for the region (default III) at the last series.csv time:
+
+  front    compaction-front speed in the wall frame [m/s]: least squares of front.csv over the
+           fit window (default 100-190 ns)
+  P        mean pressure [GPa]; rho the points' mean density [g/cc]; open the band's open
+           porosity (series.csv open_porosity, 1 - sum V / band area)
+  zero-P   not here (needs snapshots): see docs/verification.md
+  energy   (total - initial) / initial from energy.csv; residual likewise
+  cost     particle-steps and wall seconds (run.json)
+
+and, with three or more cell sizes, the Richardson limit of the front speed from the three finest
+(observed order p = log2(d1 / d2) for halving h) and each run's error against it, plus the fully
+compacted Rankine-Hugoniot front from run.json (compacted_hugoniot).
+
+  /usr/bin/python3 bench/porous_convergence.py [--h 4,2,1] [--set KEY=VALUE ...] [--out DIR]
+      [--case FILE] [--region III] [--window 100,190] [--driver build/shockmpm] [--reuse]
+
+--reuse tabulates existing outputs in DIR without running. Output: a markdown table on stdout.
+Figures in docs/verification.md ("Porous strip") come from this script.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def front_speed(outdir, window):
+    rows = read_csv(os.path.join(outdir, "front.csv"))
+    t = np.array([float(r["time_ns"]) for r in rows])
+    y = np.array([float(r["front_y_um"]) for r in rows])
+    sel = (t >= window[0]) & (t <= window[1])
+    if sel.sum() < 3:
+        return math.nan
+    return float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3  # um/ns -> m/s
+
+
+def summarise(outdir, region, window):
+    run = json.load(open(os.path.join(outdir, "run.json")))
+    series = [r for r in read_csv(os.path.join(outdir, "series.csv")) if r["region"] == region]
+    last = series[-1]
+    energy = read_csv(os.path.join(outdir, "energy.csv"))
+    e0, e1 = float(energy[0]["total_J_per_m"]), float(energy[-1]["total_J_per_m"])
+    res = float(energy[-1].get("residual_J_per_m", "nan"))
+    comp = next((b.get("compacted_hugoniot", {}) for b in run.get("bodies", []) if "compacted_hugoniot" in b), {})
+    return {
+        "h_um": run["case_resolved"]["grid"].get("cell_size_um", math.nan),
+        "front": front_speed(outdir, window),
+        "P": float(last["P_mean_GPa"]),
+        "rho": float(last["rho_mean_gcc"]),
+        "open": float(last.get("open_porosity", "nan")),
+        "R2": float(last["R2_mean_per_us2"]),
+        "D2": float(last["D2_mean_per_us2"]),
+        "energy": (e1 - e0) / e0,
+        "residual": res / e0,
+        "particle_steps": run["particles"] * run["steps"],
+        "wall_s": run["wall_seconds"],
+        "time_ns": float(last["time_ns"]),
+        "rh_front": comp.get("front_speed_wall_frame_m_s", math.nan),
+        "status": run.get("status", "?"),
+    }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    ap.add_argument("--case", default=os.path.join(root, "cases/verify/porous_strip.toml"))
+    ap.add_argument("--h", default="4,2,1", help="cell sizes [um], coarse to fine")
+    ap.add_argument("--set", action="append", default=[], help="driver --set, repeatable")
+    ap.add_argument("--out", default="out/porous_convergence")
+    ap.add_argument("--region", default="III")
+    ap.add_argument("--window", default="100,190", help="front fit window [ns]")
+    ap.add_argument("--driver", default=os.path.join(root, "build/shockmpm"))
+    ap.add_argument("--reuse", action="store_true", help="tabulate existing outputs, run nothing")
+    a = ap.parse_args()
+    hs = [float(x) for x in a.h.split(",")]
+    window = [float(x) for x in a.window.split(",")]
+    rows = []
+    for h in hs:
+        outdir = os.path.join(a.out, f"h{h:g}")
+        if not a.reuse:
+            cmd = [a.driver, "run", a.case, "--quiet", "--out", outdir, "--set", f"grid.cell_size_um={h}"]
+            for s in a.set:
+                cmd += ["--set", s]
+            print("running:", " ".join(cmd), file=sys.stderr, flush=True)
+            if subprocess.run(cmd).returncode != 0:
+                print(f"run at h = {h} um did not complete (see {outdir}/run.json)", file=sys.stderr)
+        try:
+            rows.append(summarise(outdir, a.region, window))
+        except (OSError, KeyError, ValueError, IndexError) as e:
+            print(f"cannot read {outdir}: {e}", file=sys.stderr)
+    if not rows:
+        sys.exit(1)
+    limit = math.nan
+    if len(rows) >= 3:
+        f1, f2, f3 = (r["front"] for r in rows[-3:])
+        d1, d2 = f1 - f2, f2 - f3
+        if d1 != 0 and d2 != 0 and d1 / d2 > 1:
+            p = math.log2(d1 / d2)
+            limit = f3 - d2 / (2 ** p - 1)
+            print(f"Richardson: observed order {p:.2f}, limit {limit:.0f} m/s", file=sys.stderr)
+    rh = rows[0]["rh_front"]
+    print(f"Front over {window[0]:g}-{window[1]:g} ns; region {a.region} at {rows[0]['time_ns']:g} ns. "
+          f"Richardson limit of the front: {limit:.0f} m/s; fully compacted Rankine-Hugoniot front: {rh:.0f} m/s.")
+    print()
+    print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho [g/cc] | open porosity | <R^2> / <D^2> [1/us^2] "
+          "| energy | particle-steps | wall [s] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        vl = (r["front"] / limit - 1) * 100 if math.isfinite(limit) else math.nan
+        vr = (r["front"] / rh - 1) * 100 if math.isfinite(rh) else math.nan
+        print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} "
+              f"| {r['open'] * 100:.1f} % | {r['R2']:.1f} / {r['D2']:.1f} | {r['energy'] * 100:+.2g} % "
+              f"| {r['particle_steps']:.3g} | {r['wall_s']:.1f} |")
+
+
+if __name__ == "__main__":
+    main()
