@@ -52,10 +52,12 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
-  if (cfg_.strain_rate == StrainRate::Auto)
-    midstep_ = cfg_.scheme == Scheme::USL && cfg_.transfer == Transfer::APIC && !P_.e.empty();
-  else
-    midstep_ = cfg_.strain_rate == StrainRate::Midstep && cfg_.scheme == Scheme::USL;
+  // the mid-step strain rate needs the heating gather (APIC with an energy field), USL
+  const bool can_mid = cfg_.scheme == Scheme::USL && transfer_heat();
+  if (cfg_.strain_rate == StrainRate::Midstep && !can_mid)
+    throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl', transfer 'apic' and an "
+                                "energy field (a Mie-Grueneisen material or heat conduction); use 'auto' or 'updated'");
+  midstep_ = cfg_.strain_rate != StrainRate::Updated && can_mid;
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);

@@ -26,9 +26,9 @@ enum class Transfer { APIC, FLIP };
 // (Particles::field), welded where they fill a node (kern::grid_contact).
 enum class VoidFaces { SingleField, Separate };
 // Velocity of the USL strain rate: the node's mid-step velocity (energy-conserving step, not
-// symplectic: needs the damping of APIC or viscosity) or the updated one (symplectic, loses
-// dt^2 |f|^2 / 2m per node and step). Auto: mid-step with APIC, USL and an energy field (shock
-// runs), else updated (kern::g2p_particle, docs/method.md "Energy").
+// symplectic: needs the damping of APIC or viscosity; APIC with an energy field only) or the
+// updated one (symplectic, loses dt^2 |f|^2 / 2m per node and step). Auto: mid-step where it is
+// available (shock runs), else updated (kern::g2p_particle, docs/method.md).
 enum class StrainRate { Auto, Midstep, Updated };
 // USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
 // updated particles.

@@ -279,17 +279,16 @@ struct G2PParams {
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
 // the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T,
-// in the USL pass (Full) with q.mid = 0.5 from the node's mid-step velocity
-// v_i = (v_i^old + v_i^new) / 2 (APIC: px, py hold v^old, the grid update's scatter_velocity;
-// FLIP: v^new - dv / 2). The grid's kinetic energy changes by exactly dt f_i . (v^old + v^new) / 2
+// in the USL pass with transfer heating (Full, Heat) and q.mid = 0.5 from the node's mid-step
+// velocity v_i = (v_i^old + v_i^new) / 2 (px, py hold v^old, the grid update's scatter_velocity). The grid's kinetic energy changes by exactly dt f_i . (v^old + v^new) / 2
 // in the explicit update, and the constitutive update's work dt V sigma : D with the stress that
 // made f_i (kern::constitutive_range, mid-step energy) is then exactly its negative: the step
 // conserves energy node by node, partly filled nodes at void faces and free surfaces included
 // (with L from v^new the step loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small).
 // The mid-step strain rate with forces from the old stress is not symplectic: an undamped mode
 // of frequency w grows by about (w dt)^2 / 2 per step. APIC's transfers damp grid-scale modes
-// and shock runs carry viscosity; FLIP and elastic runs take the updated velocity (q.mid = 0):
-// the engine chooses (SolverConfig::midstep, docs/method.md "Energy").
+// and shock runs carry viscosity; FLIP and elastic runs take the updated velocity (the FLIP
+// disks and the linear-hat bar of test_elastic blew up with the mid-step one; docs/method.md).
 //
 // Heat (APIC only): both transfers dissipate kinetic energy, and both losses split exactly
 // into per-particle shares (the kinetic energy of a particle counts its affine field,
@@ -322,7 +321,9 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
-  constexpr bool kMid = What == G2PWhat::Full;  // USL: L from the mid-step velocity
+  // USL with transfer heating (APIC with an energy field, which reads px anyway): L may take the
+  // mid-step velocity (q.mid); other passes and transfers form L from the updated velocity
+  constexpr bool kMid = What == G2PWhat::Full && Heat;
   double axx = 0, axy = 0, ayx = 0, ayy = 0;   // sum v_new grad w^T (APIC C of the linear hat)
   static_assert(!Heat || kAffine, "transfer heating is defined for the APIC velocity gather");
   double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
@@ -348,13 +349,8 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       // velocity after the walls (see the comment above)
       double lvx = gvx, lvy = gvy;
       if constexpr (kMid) {
-        if constexpr (FLIP) {
-          lvx = gvx - q.mid * G.dvx[n];
-          lvy = gvy - q.mid * G.dvy[n];
-        } else {
-          lvx = gvx - q.mid * (gvx - G.px[n]);
-          lvy = gvy - q.mid * (gvy - G.py[n]);
-        }
+        lvx = gvx - q.mid * (gvx - G.px[n]);
+        lvy = gvy - q.mid * (gvy - G.py[n]);
       }
       if constexpr (!PureFlip) {
         vx += w * gvx;

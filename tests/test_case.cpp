@@ -286,3 +286,17 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
   CHECK_THROWS_WITH(build({"solver.scheme=\"musl\"", "contact.void_faces=\"separate\""}),
                     Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));
 }
+
+TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear error", "[case]") {
+  auto sim_for = [](const std::string& file, std::vector<std::string> sets) {
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/" + file);
+    apply_overrides(doc, sets);
+    Scene sc = build_scene(doc, "s", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    return Simulation(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  };
+  CHECK(sim_for("dense_impact_1000.toml", {}).midstep());
+  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.strain_rate=\"updated\""}).midstep());
+  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());
+  CHECK_THROWS_WITH(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}),
+                    Catch::Contains("'midstep' needs scheme 'usl', transfer 'apic'"));
+}
