@@ -8,16 +8,7 @@
 #   bash bench/study_device.sh [DEADLINE]
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-B="$ROOT/.devbundle"
-grep -m1 "model name" /proc/cpuinfo; nproc; free -g | head -2
-level=v3; grep -qw avx512f /proc/cpuinfo && grep -qw avx512bw /proc/cpuinfo && level=v4
-echo "build: x86-64-$level"
-LOADER=$(ls "$B"/lib/ld-linux-x86-64.so.* | head -1)
-cat > /tmp/shockmpm <<EOS
-#!/bin/sh
-exec "$LOADER" --library-path "$B/lib" "$B/shockmpm-$level" "\$@"
-EOS
-chmod +x /tmp/shockmpm
+source "$ROOT/bench/device_env.sh" shockmpm
 # set here: the driver would otherwise start itself again through /proc/self/exe (the loader)
 export GOMP_SPINCOUNT=1000 OMP_NUM_THREADS=2
 deadline="${1:-540}"

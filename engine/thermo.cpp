@@ -57,6 +57,25 @@ double Thermo::temperature(double rho, double e, double stored) const {
   return isentrope_temperature(r) + (heat - isentrope_energy(r)) / m_.cv;
 }
 
+namespace {
+// The state behind the shock from its density and pressure, the material ahead at rest at
+// (rho00, P = 0, e = 0): particle and shock speeds, energy, temperatures.
+HugoniotState jump_state(const Material& m, double rho00, double rho, double P) {
+  HugoniotState h;
+  const double dV = 1.0 / rho00 - 1.0 / rho;
+  h.rho = rho;
+  h.P = P;
+  h.up = std::sqrt(std::max(0.0, P * dV));
+  h.Us = h.P / (rho00 * h.up);
+  h.e = 0.5 * h.P * dV;
+  Material simple = m;
+  simple.temperature = TemperatureKind::Simple;
+  h.T = Thermo(m).temperature(h.rho, h.e);
+  h.T_simple = Thermo(simple).temperature(h.rho, h.e);
+  return h;
+}
+}  // namespace
+
 HugoniotState hugoniot(const Material& m, double up) {
   if (m.eos != EosKind::MieGruneisen) throw std::invalid_argument("hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
   const auto eos = m.mie_gruneisen();
@@ -77,18 +96,10 @@ HugoniotState hugoniot(const Material& m, double up) {
     const double mid = 0.5 * (lo + hi);
     (state(mid, P) < up ? lo : hi) = mid;
   }
-  HugoniotState h;
-  h.rho = 0.5 * (lo + hi);
-  h.up = state(h.rho, P);
+  const double rho = 0.5 * (lo + hi);
+  state(rho, P);
+  HugoniotState h = jump_state(m, m.rho0, rho, P);
   h.in_range = std::abs(h.up - up) <= 1e-6 * up;
-  h.P = P;
-  h.Us = h.P / (m.rho0 * h.up);
-  h.e = 0.5 * h.P * (V0 - 1.0 / h.rho);
-  const Thermo th(m);
-  Material simple = m;
-  simple.temperature = TemperatureKind::Simple;
-  h.T = th.temperature(h.rho, h.e);
-  h.T_simple = Thermo(simple).temperature(h.rho, h.e);
   return h;
 }
 
@@ -111,6 +122,7 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
   // on the branch P > 0, then bisect
   HugoniotState h;
   h.in_range = false;
+  double root = 0.0;
   const int n = 4000;
   auto try_bracket = [&](double a, double b) {
     if (!(f(a) < 0.0 && f(b) > 0.0) && !(f(a) > 0.0 && f(b) < 0.0)) return false;
@@ -119,8 +131,7 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
       const double mid = 0.5 * (a + b);
       ((f(mid) < 0.0) == (f(a) < 0.0) ? a : b) = mid;
     }
-    h.rho = 0.5 * (a + b);
-    h.in_range = true;
+    root = 0.5 * (a + b);
     return true;
   };
   bool found = false;
@@ -133,16 +144,7 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
     found = try_bracket(a, b);
   }
   if (!found) return h;
-  h.P = pressure(h.rho);
-  h.up = std::sqrt(h.P * (V00 - 1.0 / h.rho));
-  h.Us = h.P / (rho00 * h.up);
-  h.e = 0.5 * h.P * (V00 - 1.0 / h.rho);
-  const Thermo th(m);
-  Material simple = m;
-  simple.temperature = TemperatureKind::Simple;
-  h.T = th.temperature(h.rho, h.e);
-  h.T_simple = Thermo(simple).temperature(h.rho, h.e);
-  return h;
+  return jump_state(m, rho00, root, pressure(root));
 }
 
 }  // namespace smpm
