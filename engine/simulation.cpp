@@ -180,7 +180,7 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
-  q.scatter_velocity = cfg_.transfer == Transfer::APIC;  // the gather reads p / m (kern::g2p_particle)
+  q.scatter_velocity = transfer_heat();  // the heating gather reads p / m (kern::g2p_particle)
   {
     Timed t(times_.grid);
     WallForces w;
