@@ -52,10 +52,10 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
-  // the mid-step strain rate needs the heating gather (APIC with an energy field), USL
+  // the mid-step strain rate needs the heating gather (APIC or FLIP with an energy field), USL
   const bool can_mid = cfg_.scheme == Scheme::USL && transfer_heat();
   if (cfg_.strain_rate == StrainRate::Midstep && !can_mid)
-    throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl', transfer 'apic' and an "
+    throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl' and an "
                                 "energy field (a Mie-Grueneisen material or heat conduction); use 'auto' or 'updated'");
   midstep_ = cfg_.strain_rate != StrainRate::Updated && can_mid;
   // ids name particles in messages and snapshots: their order as given
@@ -180,7 +180,8 @@ void Simulation::update_grid() {
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
-  q.scatter_velocity = transfer_heat();  // the heating gather reads p / m (kern::g2p_particle)
+  // APIC's heating gather reads p / m (kern::g2p_particle); FLIP's takes v - dv
+  q.scatter_velocity = transfer_heat() && cfg_.transfer == Transfer::APIC;
   {
     Timed t(times_.grid);
     WallForces w;
@@ -213,6 +214,9 @@ void Simulation::update_grid() {
     if (q.scatter_velocity) {  // the gather reads the scatter's velocity (and contact heat)
       double* scatter[] = {F.px, F.py, F.heat};
       kern::fill_periodic_ghosts(g, box_, scatter, G.fields > 1 ? 3 : 2);
+    } else if (transfer_heat() && G.fields > 1) {  // FLIP's heating gather: contact heat
+      double* heat[] = {F.heat};
+      kern::fill_periodic_ghosts(g, box_, heat, 1);
     }
   }
 }

@@ -148,9 +148,11 @@ class Simulation {
   void check_volume(std::ptrdiff_t bad) const;
   kern::ParticleView pview();  // particle view, with velocity fields when contact is on
   transfer::StepArgs transfer_args();  // what the transfers read (engine/transfer_step.hpp)
-  // APIC with an energy field: the transfers' kinetic-energy dissipation heats the particles
-  // (see kern::g2p_particle), so total energy is conserved by the transfers.
-  bool transfer_heat() const { return cfg_.transfer == Transfer::APIC && !P_.e.empty(); }
+  // APIC, or FLIP with USL, with an energy field: the transfers' kinetic-energy dissipation
+  // heats the particles (see kern::g2p_particle), so total energy is conserved by the transfers.
+  bool transfer_heat() const {
+    return !P_.e.empty() && (cfg_.transfer == Transfer::APIC || cfg_.scheme == Scheme::USL);
+  }
   // USL strain rate from the mid-step grid velocity (StrainRate, resolved in the constructor)
   bool midstep_ = false;
 

@@ -23,7 +23,7 @@ struct StepArgs {
   const std::uint32_t* cell_start;
   kern::NodeBox box;
   const SolverConfig& cfg;
-  bool heat;  // APIC with an energy field: the gather heats the particles (Simulation::transfer_heat)
+  bool heat;  // APIC, or FLIP with USL, with an energy field: the gather heats the particles (Simulation::transfer_heat)
 };
 
 // The constitutive update of a block of points [first, last) with their gradient L, which the

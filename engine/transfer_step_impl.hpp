@@ -37,6 +37,7 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   if (a.cfg.scheme == Scheme::USL) {
     auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
       constexpr int C = decltype(contact)::value;
+      if (flip && a.heat) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
       if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
       if (a.heat) return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
       return kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);

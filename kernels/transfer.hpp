@@ -287,10 +287,11 @@ struct G2PParams {
 // (with L from v^new the step loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small).
 // The mid-step strain rate with forces from the old stress is not symplectic: an undamped mode
 // of frequency w grows by about (w dt)^2 / 2 per step. APIC's transfers damp grid-scale modes
-// and shock runs carry viscosity; FLIP and elastic runs take the updated velocity (the FLIP
-// disks and the linear-hat bar of test_elastic blew up with the mid-step one; docs/method.md).
+// and shock runs carry viscosity; elastic runs (no energy field) take the updated velocity (the
+// FLIP disks and the linear-hat bar of test_elastic blew up with the mid-step one;
+// docs/method.md). FLIP with an energy field takes v^old = v^new - dv.
 //
-// Heat (APIC only): both transfers dissipate kinetic energy, and both losses split exactly
+// Heat (APIC; FLIP below): both transfers dissipate kinetic energy, and both losses split exactly
 // into per-particle shares (the kinetic energy of a particle counts its affine field,
 // 1/2 m (|v_p|^2 + sum_ab C_ab^2 D_b)):
 //   scatter  1/2 sum_i w_ip |v_p + C_p (x_i - x_p) - v_i^old|^2    (v_i^old = p_i / m_i)
@@ -325,13 +326,17 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   // mid-step velocity (q.mid); other passes and transfers form L from the updated velocity
   constexpr bool kMid = What == G2PWhat::Full && Heat;
   double axx = 0, axy = 0, ayx = 0, ayy = 0;   // sum v_new grad w^T (APIC C of the linear hat)
-  static_assert(!Heat || kAffine, "transfer heating is defined for the APIC velocity gather");
+  static_assert(!Heat || kAffine || (FLIP && What == G2PWhat::Full),
+                "transfer heating is defined for the APIC velocity gather and the FLIP USL gather");
   double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
+  double d2 = 0;          // FLIP: sum w |dv_i|^2
   double qc = 0;          // sum w q_i: the contact step's dissipation (several fields)
   double ux = 0, uy = 0, uxx = 0, uxy = 0, uyx = 0, uyy = 0;  // old v_p and C_p h
   if constexpr (Heat) {
     ux = P.vx[p]; uy = P.vy[p];
-    uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
+    if constexpr (!FLIP) {
+      uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
+    }
   }
   // with Contact the view always carries field_of (Simulation::pview): the lookup without
   // field()'s null test vectorizes
@@ -348,7 +353,10 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       // USL: L from the mid-step velocity (v_old + v_new) / 2 of the node, v_old the scatter's
       // velocity after the walls (see the comment above)
       double lvx = gvx, lvy = gvy;
-      if constexpr (kMid) {
+      if constexpr (kMid && FLIP) {  // FLIP: v_old = v_new - dv (the grid update's increment)
+        lvx = gvx - q.mid * G.dvx[n];
+        lvy = gvy - q.mid * G.dvy[n];
+      } else if constexpr (kMid) {
         lvx = gvx - q.mid * (gvx - G.px[n]);
         lvy = gvy - q.mid * (gvy - G.py[n]);
       }
@@ -356,7 +364,13 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
         vx += w * gvx;
         vy += w * gvy;
       }
-      if constexpr (Heat) {
+      if constexpr (Heat && FLIP) {  // v_i^old = v_i - dv_i
+        v2 += w * (gvx * gvx + gvy * gvy);
+        d2 += w * (G.dvx[n] * G.dvx[n] + G.dvy[n] * G.dvy[n]);
+        const double rx = ux - gvx + G.dvx[n], ry = uy - gvy + G.dvy[n];
+        r2 += w * (rx * rx + ry * ry);
+        if constexpr (Contact != 0) qc += w * G.heat[n];  // the contact step's loss, a weld's too
+      } else if constexpr (Heat) {
         v2 += w * (gvx * gvx + gvy * gvy);
         const double dx = (bx + a) - xg;  // px, py hold the scatter's velocity p / m here
         const double rx = ux + uxx * dx + uxy * dy - G.px[n];
@@ -413,6 +427,15 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine) + qc;
     }
   }
+  if constexpr (Heat && FLIP) {
+    // FLIP/PIC blend v = alpha v_F + (1 - alpha) v_PIC, v_F = v_p + sum w dv_i, v_PIC = sum w v_i:
+    // its loss is alpha (FLIP's) + (1 - alpha) (PIC's) + alpha (1 - alpha) 1/2 |v_F - v_PIC|^2,
+    // FLIP's 1/2 (sum w |dv_i|^2 - |sum w dv_i|^2) and PIC's the scatter and gather losses
+    // above; each share >= 0 and their sum over the points exactly the transfers' loss
+    const double al = q.flip_alpha, fx = ux + dvx - vx, fy = uy + dvy - vy;
+    P.e[p] += 0.5 * (al * (d2 - dvx * dvx - dvy * dvy) + (1.0 - al) * (r2 + v2 - vx * vx - vy * vy) +
+                     al * (1.0 - al) * (fx * fx + fy * fy)) + qc;
+  }
   if constexpr (What != G2PWhat::PositionGradient) {
     if constexpr (PureFlip) {
       P.vx[p] = P.vx[p] + dvx;
@@ -434,7 +457,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     x = x >= g.x0 + L ? x - L : x;
     P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
     P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
-    if constexpr (Heat && !Shape::constant_D && What == G2PWhat::Full) {
+    if constexpr (Heat && !FLIP && !Shape::constant_D && What == G2PWhat::Full) {
       // D of the linear hat and uGIMP depends on where the point sits in its cell. The affine
       // kinetic energy the next scatter sees (and Simulation::energy counts) is the one at the
       // new position: the difference is heat of the move, so total energy still balances

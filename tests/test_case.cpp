@@ -296,7 +296,9 @@ TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear err
   };
   CHECK(sim_for("dense_impact_1000.toml", {}).midstep());
   CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.strain_rate=\"updated\""}).midstep());
-  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());
-  CHECK_THROWS_WITH(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}),
-                    Catch::Contains("'midstep' needs scheme 'usl', transfer 'apic'"));
+  CHECK(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());  // FLIP heats too
+  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.scheme=\"musl\""}).midstep());
+  CHECK_THROWS_WITH(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.scheme=\"musl\"",
+                                                       "solver.strain_rate=\"midstep\""}),
+                    Catch::Contains("'midstep' needs scheme 'usl' and an energy field"));
 }
