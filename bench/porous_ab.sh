@@ -10,7 +10,7 @@ tmp="$(mktemp -d)"
 for i in $(seq "$n"); do
   for which in old new; do
     bin=$old; [ "$which" = new ] && bin=$new
-    "$bin" run "$case_file" --quiet --set run.max_steps="$steps" "$@" --out "$tmp/$which" > /dev/null
+    "$bin" run "$case_file" --quiet --set run.max_steps="$steps" "$@" --overwrite --out "$tmp/$which" > /dev/null
     v=$(grep -o '"particle_steps_per_s" : [0-9.e+]*' "$tmp/$which/run.json" | awk '{print $3}')
     echo "$which $i $v"
   done

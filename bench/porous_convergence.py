@@ -92,7 +92,7 @@ def main():
     for h in hs:
         outdir = os.path.join(a.out, f"h{h:g}")
         if not a.reuse:
-            cmd = [a.driver, "run", a.case, "--quiet", "--out", outdir, "--set", f"grid.cell_size_um={h}"]
+            cmd = [a.driver, "run", a.case, "--quiet", "--overwrite", "--out", outdir, "--set", f"grid.cell_size_um={h}"]
             for s in a.set:
                 cmd += ["--set", s]
             print("running:", " ".join(cmd), file=sys.stderr, flush=True)

@@ -17,7 +17,7 @@ TMP="$(mktemp -d)"
 trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$TMP"' EXIT
 run_one() {  # env-assignments threads -> M/s
   local t=$1; shift
-  env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT "$@" "$EXE" run "$ROOT/cases/quickstart.toml" --out "$TMP/o" --quiet \
+  env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT "$@" "$EXE" run "$ROOT/cases/quickstart.toml" --out "$TMP/o" --overwrite --quiet \
     --threads "$t" --set run.max_steps="$STEPS" > /dev/null
   /usr/bin/python3 -c "import json;print(json.load(open('$TMP/o/run.json'))['particle_steps_per_s']/1e6)"
 }

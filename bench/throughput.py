@@ -135,7 +135,7 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
 
 def run_one(binary, scene, key, value, steps, threads, workdir):
     out = Path(workdir) / f"{scene}-{value}-t{threads}"
-    cmd = [str(binary), "run", str(ROOT / "cases" / "bench" / f"{scene}.toml"), "--out", str(out), "--quiet",
+    cmd = [str(binary), "run", str(ROOT / "cases" / "bench" / f"{scene}.toml"), "--out", str(out), "--overwrite", "--quiet",
            "--set", f"{key}={value}", "--set", f"run.max_steps={steps}"]
     env = dict(os.environ, OMP_NUM_THREADS=str(threads))
     t0 = time.time()

@@ -13,9 +13,9 @@ speed() { /usr/bin/python3 -c "import json;print(round(json.load(open('$TMP/o/ru
 spin=(); passive=()
 if [ "${LOADED:-0}" = 1 ]; then yes > /dev/null & YES=$!; trap 'kill $YES; rm -rf "$TMP"' EXIT; fi
 for ((r = 0; r < ROUNDS; ++r)); do
-  env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=300000 "$BUILD/shockmpm" run "$@" --out "$TMP/o" --quiet --threads 2 > /dev/null
+  env -u OMP_WAIT_POLICY GOMP_SPINCOUNT=300000 "$BUILD/shockmpm" run "$@" --out "$TMP/o" --overwrite --quiet --threads 2 > /dev/null
   spin+=("$(speed)")
-  env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT "$BUILD/shockmpm" run "$@" --out "$TMP/o" --quiet --threads 2 > /dev/null
+  env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT "$BUILD/shockmpm" run "$@" --out "$TMP/o" --overwrite --quiet --threads 2 > /dev/null
   passive+=("$(speed)")
   echo "round $r: libgomp default ${spin[-1]}  shockmpm default (1000 spins) ${passive[-1]}"
 done

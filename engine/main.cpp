@@ -31,6 +31,25 @@ void default_wait_policy(char** argv) {
   unsetenv("GOMP_SPINCOUNT");
 }
 
+// The command line as typed, each argument shell-quoted where it needs it (run.json).
+std::string command_line(int argc, char** argv) {
+  std::string s;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool plain = !a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                                         "0123456789-_./=:,+@%") == std::string::npos;
+    if (i) s += ' ';
+    if (plain) {
+      s += a;
+    } else {
+      s += '\'';
+      for (char c : a) s += c == '\'' ? std::string("'\\''") : std::string(1, c);
+      s += '\'';
+    }
+  }
+  return s;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -40,7 +59,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::string case_file, out_dir;
   int threads = 0;
-  bool quiet = false;
+  bool quiet = false, overwrite = false;
   std::vector<std::string> sets;
   auto* run = app.add_subcommand("run", "run a case");
   run->add_option("case", case_file, "case file (TOML)")->required();
@@ -48,6 +67,8 @@ int main(int argc, char** argv) {
   run->add_option("--threads", threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 1024));
   run->add_option("--set", sets, "override a case value: section.key=value (TOML syntax)");
   run->add_flag("--quiet", quiet, "no progress lines");
+  run->add_flag("--overwrite", overwrite,
+                "replace the results of an earlier run in the output directory (refused without it)");
   auto* check = app.add_subcommand("check", "validate a case and print what a run would do");
   check->add_option("case", case_file, "case file (TOML)")->required();
   check->add_option("--set", sets, "override a case value: section.key=value (TOML syntax)");
@@ -57,12 +78,15 @@ int main(int argc, char** argv) {
     auto doc = smpm::parse_case_file(case_file);
     smpm::apply_overrides(doc, sets);
     const std::filesystem::path path(case_file);
+    smpm::RunOptions opt{out_dir, threads, quiet, overwrite, command_line(argc, argv)};
+    if (run->parsed()) smpm::check_output_dir(smpm::output_dir(opt, path.stem().string()), overwrite);
     smpm::Scene scene = smpm::build_scene(doc, path.stem().string(), path.parent_path());
     if (check->parsed()) {
       std::cout << smpm::describe_scene(scene);
       return 0;
     }
-    const auto s = smpm::run_scene(scene, {out_dir, threads, quiet});
+    const auto s = smpm::run_scene(scene, opt);
+    if (s.output_failed) return 1;
     return s.status == "completed" ? 0 : 3;
   } catch (const smpm::CaseError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -4,16 +4,21 @@
 #include <sys/resource.h>
 
 #include <atomic>
+#include <cerrno>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
 
+#include "engine/case_reader.hpp"
 #include "engine/diagnostics.hpp"
 #include "engine/output.hpp"
+#include "engine/provenance.hpp"
 #include "engine/thermo.hpp"
 #include "engine/timer.hpp"
 
@@ -25,6 +30,38 @@ namespace {
 // current step and writes its last state, as for a batch scheduler's SIGTERM.
 std::atomic<int> g_stop_signal{0};
 extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
+
+// An output that could not be written: the run ends "failed", exit 1 (RunSummary::output_failed).
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// A CSV stream after a row: flushed whole (a killed run leaves no cut row) and checked.
+void flush_checked(std::ofstream& o, const std::filesystem::path& file) {
+  o.flush();
+  if (!o) throw OutputError("cannot write " + file.string() + ": " + std::strerror(errno));
+}
+
+// What a run writes into its output directory (and nothing else is removed by --overwrite).
+const char* const kOutputFiles[] = {"run.json", "case_resolved.toml", "energy.csv", "series.csv", "series.h5",
+                                    "front.csv", "wall.csv", "voids.csv"};
+const char* const kOutputDirs[] = {"fields", "figures"};
+
+// Before a run writes: an earlier run's outputs (only with overwrite, check_output_dir) and
+// any partial .tmp file of a killed run go.
+void clear_output_dir(const std::filesystem::path& out, bool overwrite) {
+  namespace fs = std::filesystem;
+  if (fs::exists(out / "run.json") && !overwrite) check_output_dir(out, overwrite);  // throws
+  for (const fs::path& d : {out, out / "fields"}) {
+    std::error_code ec;
+    if (!fs::is_directory(d, ec)) continue;
+    for (const auto& f : fs::directory_iterator(d))
+      if (f.path().extension() == ".tmp") fs::remove(f.path());
+  }
+  if (!overwrite) return;
+  for (const char* f : kOutputFiles) fs::remove(out / f);
+  for (const char* d : kOutputDirs) fs::remove_all(out / d);
+}
 
 // Peak resident set size of the process [bytes] (Linux reports KiB).
 long long peak_rss_bytes() {
@@ -82,9 +119,10 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
 }
 
 void write_run_json(const std::filesystem::path& file, const Scene& scene, const Simulation& sim,
-                    const RunSummary& s, int threads) {
+                    const RunSummary& s, int threads, const toml::table& prov) {
   toml::table t;
   t.insert("version", SHOCKMPM_VERSION);
+  t.insert("provenance", prov);
   t.insert("case", scene.name);
   t.insert("status", s.status);
   t.insert("message", s.message);
@@ -151,9 +189,17 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   {
     std::ofstream o(tmp);
     o << toml::json_formatter{t} << "\n";
-    if (!o) throw std::runtime_error("cannot write " + tmp);
+    o.flush();
+    if (!o) {
+      const std::string why = std::strerror(errno);
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw OutputError("cannot write " + tmp + ": " + why);
+    }
   }
-  std::filesystem::rename(tmp, file);
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) throw OutputError("cannot rename " + tmp + " to " + file.string() + ": " + ec.message());
 }
 
 }  // namespace
@@ -222,22 +268,34 @@ std::string resolved_case_text(const Scene& scene) {
   return o.str();
 }
 
+std::filesystem::path output_dir(const RunOptions& opt, const std::string& case_name) {
+  return opt.out_dir.empty() ? std::filesystem::path("out") / case_name : opt.out_dir;
+}
+
+void check_output_dir(const std::filesystem::path& out, bool overwrite) {
+  std::error_code ec;
+  if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
+    throw CaseError("output directory '" + out.string() + "' is a file; choose another --out");
+  if (!overwrite && std::filesystem::exists(out / "run.json", ec))
+    throw CaseError("output directory '" + out.string() + "' holds an earlier run (run.json); pass --overwrite to "
+                    "replace its results, or choose another --out");
+}
+
 RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
   const int threads = omp_get_max_threads();
-  const auto out = opt.out_dir.empty() ? std::filesystem::path("out") / scene.name : opt.out_dir;
+  const auto out = output_dir(opt, scene.name);
+  const toml::table prov = provenance(opt.command_line, threads);
+  Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
+  // a run owns its output directory: an earlier run's results there go (--overwrite), now
+  // that this one is built and about to write its own
   std::filesystem::create_directories(out);
+  clear_output_dir(out, opt.overwrite);
   {
     std::ofstream c(out / "case_resolved.toml");
     c << resolved_case_text(scene);
+    flush_checked(c, out / "case_resolved.toml");
   }
-  Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
-  // a run owns its output directory: snapshots of an earlier run there would mix with this one's
-  if (std::filesystem::is_directory(out / "fields"))
-    for (const auto& f : std::filesystem::directory_iterator(out / "fields")) {
-      const std::string name = f.path().filename().string();
-      if (name.rfind("snap_", 0) == 0 && f.path().extension() == ".h5") std::filesystem::remove(f.path());
-    }
   SnapshotWriter snaps(out / "fields");
   RunSummary s;
   // the compression front runs through the target: the body named "target", else body 0
@@ -265,7 +323,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       if (r.body != b) continue;
       voids << sim.time() * 1e9 << ',' << r.name << ',' << a[k + 1] * 1e12 << ',' << a[k + 1] / ((r.y1 - r.y0) * g.length_x()) << '\n';
     }
-    voids.flush();
+    flush_checked(voids, out / "voids.csv");
   };
   auto snapshot = [&] {
     {
@@ -307,7 +365,7 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       }
       series << '\n';
     }
-    series.flush();
+    flush_checked(series, out / "series.csv");
   };
   auto write_series_h5 = [&] {
     Timed t(s.output_seconds);
@@ -326,7 +384,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     Timed t(s.diagnostics_seconds);
     const auto& g = scene.geom;
     const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
-    if (std::isfinite(y)) front << sim.time() * 1e9 << ',' << y * 1e6 << '\n' << std::flush;
+    if (std::isfinite(y)) {
+      front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
+      flush_checked(front, out / "front.csv");
+    }
   };
   std::ofstream energy(out / "energy.csv");
   energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m,"
@@ -347,10 +408,11 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     // residual: the scheme's own energy error, what is neither in the total nor removed as loss
     const double lost = sim.removed_is_heat() ? 0.0 : r.wall + r.contact;
     energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
-           << q[1] << ',' << r.wall << ',' << r.contact << ',' << e.total() + lost - E0 << '\n' << std::flush;
+           << q[1] << ',' << r.wall << ',' << r.contact << ',' << e.total() + lost - E0 << '\n';
+    flush_checked(energy, out / "energy.csv");
   };
   s.status = "running";
-  write_run_json(out / "run.json", scene, sim, s, threads);
+  write_run_json(out / "run.json", scene, sim, s, threads, prov);
   if (!opt.quiet) {
     const double dt0 = sim.stable_dt();
     std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
@@ -398,8 +460,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       particle_steps += n;
       if (has_wall) {
         Timed t(s.diagnostics_seconds);
-        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n'
-             << std::flush;  // every CSV row is flushed whole: a killed run leaves no cut row
+        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
+        flush_checked(wall, out / "wall.csv");  // every CSV row whole: a killed run leaves no cut row
       }
       if (sim.time() >= next_energy - eps) {
         write_energy();
@@ -429,19 +491,36 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   } catch (const StepError& e) {
     s.status = "failed";
     s.message = e.what();
+  } catch (const std::exception& e) {  // an output (CSV, snapshot, series.h5) failed
+    s.status = "failed";
+    s.message = e.what();
+    s.output_failed = true;
   }
   s.steps = sim.steps();
   s.end_time = sim.time();
-  // final state, whatever happened
-  write_energy();
-  write_series();
-  series.flush();
-  write_series_h5();
-  snapshot();
+  // final state, whatever happened; after an output failure each is still tried (the first
+  // failure is the run's message)
+  for (const auto& write : {std::function<void()>(write_energy), std::function<void()>(write_series),
+                            std::function<void()>(write_series_h5), std::function<void()>(snapshot)}) {
+    try {
+      write();
+    } catch (const std::exception& e) {
+      if (!s.output_failed) s.message = (s.status == "completed" ? "" : s.message + "; then ") + e.what();
+      s.status = "failed";
+      s.output_failed = true;
+    }
+  }
   // wall time of the whole loop, first and last snapshots included
   s.wall_seconds = omp_get_wtime() - wall0;
   s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
-  write_run_json(out / "run.json", scene, sim, s, threads);
+  try {
+    write_run_json(out / "run.json", scene, sim, s, threads, prov);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s (run.json could not record how the run ended: %s)\n", e.what(),
+                 s.message.c_str());
+    s.output_failed = true;
+    if (s.status == "completed") s.status = "failed";
+  }
   if (!opt.quiet) {
     std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",
                 s.status.c_str(), s.steps, s.end_time * 1e9, s.wall_seconds, s.particle_steps_per_s * 1e-6, threads);

@@ -13,7 +13,17 @@ struct RunOptions {
   std::filesystem::path out_dir;  // default out/<case stem>
   int threads = 0;                // 0: OpenMP default
   bool quiet = false;             // no progress lines
+  bool overwrite = false;         // replace an earlier run's results in out_dir (check_output_dir)
+  std::string command_line;       // for run.json's provenance
 };
+
+// The output directory a run writes (opt.out_dir, else out/<case stem>).
+std::filesystem::path output_dir(const RunOptions& opt, const std::string& case_name);
+
+// A directory holding run.json holds an earlier run: refused (CaseError, exit 2) unless
+// overwrite. Nothing is deleted here; run_scene clears the earlier run's outputs (and any
+// .tmp leftovers) only when it starts writing its own. Called before the scene is built.
+void check_output_dir(const std::filesystem::path& out, bool overwrite);
 
 struct RunSummary {
   std::string status;  // "completed", "failed", "interrupted"
@@ -24,6 +34,7 @@ struct RunSummary {
   double particle_steps_per_s = 0.0;
   double diagnostics_seconds = 0.0;  // energy, front, wall and series rows
   double output_seconds = 0.0;       // snapshots and series.h5
+  bool output_failed = false;        // an output could not be written (exit 1; message names it)
 };
 
 RunSummary run_scene(Scene& scene, const RunOptions& opt);

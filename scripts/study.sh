@@ -13,7 +13,7 @@ for c in "${cases[@]}"; do
   name="$(basename "$c" .toml)"
   out="out/paper/$name"
   echo "== $name"
-  "$BUILD_DIR/shockmpm" run "$c" --out "$out" || echo "run $name did not complete (see $out/run.json)"
+  "$BUILD_DIR/shockmpm" run "$c" --out "$out" --overwrite || echo "run $name did not complete (see $out/run.json)"
   /usr/bin/python3 scripts/figures.py "$out" --time-ns 500 > /dev/null || true
   outs+=("$out")
 done
