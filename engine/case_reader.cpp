@@ -17,14 +17,16 @@ const Quantity kConductivity{"thermal conductivity", {{"W_mK", 1.0}}};
 const Quantity kTemperature{"temperature", {{"K", 1.0}}};
 const Quantity kDimensionless{"number", {}};
 
-namespace {
-
-std::string fmt(double v) {
+std::string format_number(double v, int digits) {
   std::ostringstream s;
-  s.precision(10);
+  s.precision(digits);
   s << v;
   return s.str();
 }
+
+namespace {
+
+std::string fmt(double v) { return format_number(v, 10); }
 
 std::string join(const std::vector<std::string>& v) {
   std::string r;

@@ -15,6 +15,9 @@
 
 namespace smpm {
 
+// A number for a message, as a person reads it (%g style, `digits` significant digits).
+std::string format_number(double v, int digits = 4);
+
 struct CaseError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };

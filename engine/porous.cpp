@@ -37,7 +37,7 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
   const long pa = period > 0.0 ? std::lround(period / d) : 0;  // period in lattice steps
   PorousResult r;
   const long max_voids = listed ? static_cast<long>(spec.centers.size())
-                                : spec.count >= 0 ? spec.count : std::numeric_limits<long>::max();
+                                : std::min(spec.count >= 0 ? spec.count : spec.max_voids, spec.max_voids);
   while (r.voids < max_voids) {
     if (!listed && spec.porosity >= 0.0 && static_cast<double>(nremoved) >= spec.porosity * static_cast<double>(n)) break;
     if (!listed && spec.porosity >= 0.0 && nremoved == n) break;
@@ -50,15 +50,25 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
     }
     ++r.voids;
     r.cut.push_back({cx, cy, rad});
-    const long ca0 = static_cast<long>(std::floor((cx - rad - ox) / d));
-    const long ca1 = static_cast<long>(std::floor((cx + rad - ox) / d));
-    const long cb0 = static_cast<long>(std::floor((cy - rad - oy) / d));
-    const long cb1 = static_cast<long>(std::floor((cy + rad - oy) / d));
-    for (long b = std::max(cb0, b0); b <= std::min(cb1, b0 + nb - 1); ++b) {
+    // the void's rows within the body, and in each row its columns within the body (or within
+    // one period): a void far larger than the body costs no more than the body
+    const double cb0 = std::floor((cy - rad - oy) / d), cb1 = std::floor((cy + rad - oy) / d);
+    const long bl = static_cast<long>(std::max(cb0, double(b0))), bh = static_cast<long>(std::min(cb1, double(b0 + nb - 1)));
+    for (long b = bl; b <= bh; ++b) {
       const double py = oy + (b + 0.5) * d;
-      for (long a = ca0; a <= ca1; ++a) {
+      const double half = std::sqrt(std::max(0.0, rad * rad - (py - cy) * (py - cy)));
+      double ca0 = std::floor((cx - half - ox) / d), ca1 = std::floor((cx + half - ox) / d);
+      const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * d;  // the chord spans the period
+      if (whole_row) {
+        ca0 = double(a0);
+        ca1 = double(a0 + pa - 1);
+      } else if (pa == 0) {
+        ca0 = std::max(ca0, double(a0));
+        ca1 = std::min(ca1, double(a0 + na - 1));
+      }
+      for (long a = static_cast<long>(ca0); a <= static_cast<long>(ca1); ++a) {
         const double px = ox + (a + 0.5) * d;
-        if ((px - cx) * (px - cx) + (py - cy) * (py - cy) >= rad * rad) continue;
+        if (!whole_row && (px - cx) * (px - cx) + (py - cy) * (py - cy) >= rad * rad) continue;
         long aa = a;
         if (pa > 0) aa = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
         if (aa < a0 || aa >= a0 + na) continue;

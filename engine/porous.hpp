@@ -20,6 +20,7 @@ struct VoidSpec {
   double porosity = -1.0;      // target porosity: voids are added until it is reached, or
   long count = -1;             // a fixed number of voids
   std::uint64_t seed = 1;      // same seed, same sample (generation is serial)
+  long max_voids = 100000000;  // a bound on the random voids drawn (a porosity target may stop short)
   std::vector<Void> centers;   // explicit voids instead (radius and seed unused)
 };
 

@@ -1,5 +1,7 @@
 #include "engine/scene.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -146,6 +148,11 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
     s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
     s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
+    // sizes are checked against these before anything is allocated (check_size)
+    const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+    const double mem_default = phys > 0 ? 0.8 * phys / 1e9 : 16.0;
+    s.run.max_memory = 1e9 * r.number("max_memory_gb", 1e-3, 1e6, mem_default);
+    s.run.max_output = 1e9 * r.number("max_output_gb", 1e-3, 1e9, 20.0);
     r.finish();
   }
   // [grid]
@@ -158,14 +165,21 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.geom.x0 = x0;
     s.geom.y0 = y0;
     const double fx = (x1 - x0) / h, fy = (y1 - y0) / h;
+    // about 14 arrays of 8 bytes per node and field (grid.hpp), two fields where faces separate
+    if (!(fx * fy * 14 * 8 * 2 <= s.run.max_memory) || !(fx <= 1e8) || !(fy <= 1e8))
+      throw CaseError("case keys 'grid.cell_size', 'grid.x_range', 'grid.y_range': a grid of " + format_number(fx) + " x " +
+                      format_number(fy) + " cells of " + format_number(h * 1e6) + " um needs about " +
+                      format_number(fx * fy * 14 * 8 * 2 / 1e9) + " GB, more than 'run.max_memory_gb' = " +
+                      format_number(s.run.max_memory / 1e9) + " (default 0.8 of this machine's memory); use larger cells "
+                      "or a smaller domain, or raise run.max_memory_gb");
     s.geom.nx = static_cast<int>(std::lround(fx));
     s.geom.ny = static_cast<int>(std::lround(fy));
     if (std::fabs(fx - s.geom.nx) > 1e-6 * fx || s.geom.nx < 1)
-      throw CaseError("case key 'grid.x_range': width " + std::to_string(x1 - x0) +
-                      " m is not a whole number of cells of 'grid.cell_size' " + std::to_string(h) + " m");
+      throw CaseError("case key 'grid.x_range': width " + format_number((x1 - x0) * 1e6, 10) +
+                      " um is not a whole number of cells of 'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
     if (std::fabs(fy - s.geom.ny) > 1e-6 * fy || s.geom.ny < 1)
-      throw CaseError("case key 'grid.y_range': height " + std::to_string(y1 - y0) +
-                      " m is not a whole number of cells of 'grid.cell_size' " + std::to_string(h) + " m");
+      throw CaseError("case key 'grid.y_range': height " + format_number((y1 - y0) * 1e6, 10) +
+                      " um is not a whole number of cells of 'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
     s.geom.periodic_x = r.boolean("periodic_x", false);
     s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 8));
     if (s.geom.periodic_x && s.geom.nx < 4)
@@ -306,6 +320,22 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     if (bodies.empty()) throw CaseError("case array [[bodies]] is required: add at least one body");
     if (bodies.size() > 255) throw CaseError("case array [[bodies]]: at most 255 bodies, got " + std::to_string(bodies.size()));
     std::unordered_map<long long, std::size_t> taken;  // lattice site -> body, to reject overlaps
+    // Points a body of w x h would hold, checked before any is made: about 200 bytes each
+    // (run.json, particle_bytes_per_particle) and 8 for the void cutter's lattice; the grid's
+    // share was checked with [grid]
+    double points_so_far = 0.0;
+    const double grid_bytes = double(s.geom.nx) * double(s.geom.ny) * 14 * 8 * 2;
+    auto check_points = [&](const std::string& keys, double w, double hgt, int ppc) {
+      const double d = s.geom.h / ppc, pts = (w / d) * (hgt / d);
+      points_so_far += pts;
+      const double bytes = points_so_far * 208 + grid_bytes;
+      if (!(bytes <= s.run.max_memory) || !(points_so_far < 4e9))
+        throw CaseError("case keys '" + keys + "' with 'grid.cell_size' and 'points_per_cell': about " +
+                        format_number(points_so_far) + " points need about " + format_number(bytes / 1e9) +
+                        " GB, more than 'run.max_memory_gb' = " + format_number(s.run.max_memory / 1e9) +
+                        " (default 0.8 of this machine's memory); use a smaller body or larger cells, or raise "
+                        "run.max_memory_gb");
+    };
     for (std::size_t b = 0; b < bodies.size(); ++b) {
       CaseReader& r = bodies[b];
       BodyInfo info;
@@ -367,11 +397,13 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       } else if (r.choice("shape", {"rectangle", "disk"}, "rectangle") == "rectangle") {
         std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
         std::tie(by0, by1) = r.pair("y_range", kLength, true);
+        check_points(r.path() + ".x_range', '" + r.path() + ".y_range", bx1 - bx0, by1 - by0, ppc);
         P = fill_rectangle(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b));
       } else {
         const auto [cx, cy] = r.pair("center", kLength, false);
         const double rad = r.quantity("radius", kLength, 0.0, kInf);
         bx0 = cx - rad; bx1 = cx + rad; by0 = cy - rad; by1 = cy + rad;
+        check_points(r.path() + ".radius", bx1 - bx0, by1 - by0, ppc);
         P = fill_lattice(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b),
                          [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
       }
@@ -381,6 +413,17 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         VoidSpec spec;
         spec.radius = v.quantity("radius", kLength, 1e-12, kInf);
         spec.radius_spread = v.quantity("radius_spread", kLength, 0.0, spec.radius * (1 - 1e-12), 0.0);
+        // a void smaller than the point spacing removes no point or one: a porosity target
+        // would need millions of voids (and never end below half the spacing)
+        const double spacing = s.geom.h / ppc, rmin = spec.radius - spec.radius_spread;
+        if (rmin < spacing)
+          throw CaseError("case key '" + v.path() + ".radius': " + format_number(spec.radius * 1e6) + " um" +
+                          (spec.radius_spread > 0 ? " - radius_spread " + format_number(spec.radius_spread * 1e6) + " um" : "") +
+                          " is below the point spacing " + format_number(spacing * 1e6) +
+                          " um (grid.cell_size / points_per_cell); allowed: at least the spacing, or use smaller cells");
+        // voids beyond 50 times those that would tile the body change nothing: a bound on the loops
+        const double tiling = (bx1 - bx0) * (by1 - by0) / (M_PI * rmin * rmin);
+        const long void_limit = static_cast<long>(std::min(1e8, 50.0 * tiling + 1000.0));
         if (int(v.has("porosity")) + int(v.has("count")) + int(v.has("center")) != 1)
           throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
                           "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
@@ -389,12 +432,17 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
           spec.centers.push_back({cx, cy, spec.radius});
         } else {
           if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
-          else spec.count = v.integer("count", 0, 100000000);
+          else spec.count = v.integer("count", 0, void_limit);
+          spec.max_voids = void_limit;
           spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
         }
         v.finish();
         const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
         const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, bx0, bx1, by0, by1, spec, period);
+        if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
+          throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
+                          std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +
+                          "); allowed: a porosity these voids can cut, or larger voids");
         info.porosity = res.porosity;
         info.voids = res.voids;
         info.cut = res.cut;
@@ -425,6 +473,19 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.particles.append(P);
     }
     s.solver.ugimp_lp = 0.5 / ppc_all;
+    // snapshots: about 18 values of 8 bytes per point each (engine/run.cpp, snapshot_fields)
+    if (s.run.snapshot_interval > 0.0) {
+      const double snaps = std::floor(s.run.end_time / s.run.snapshot_interval) + 2.0;
+      const double bytes = snaps * double(s.particles.size()) * 18 * 8;
+      if (!(bytes <= s.run.max_output))
+        throw CaseError("case key 'run.snapshot_interval': " + format_number(s.run.snapshot_interval * 1e9) + " ns over " +
+                        format_number(s.run.end_time * 1e9) + " ns writes " + format_number(snaps) + " snapshots of " +
+                        std::to_string(s.particles.size()) + " points, about " + format_number(bytes / 1e9) +
+                        " GB, more than 'run.max_output_gb' = " + format_number(s.run.max_output / 1e9) +
+                        "; allowed: an interval of at least " +
+                        format_number(s.run.end_time * 1e9 * double(s.particles.size()) * 144 / s.run.max_output) +
+                        " ns, or raise run.max_output_gb");
+    }
     if (s.solver.contact && s.bodies.size() != 2)
       throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
                       "field; this case has " + std::to_string(s.bodies.size()) + " bodies");

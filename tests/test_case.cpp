@@ -82,7 +82,7 @@ TEST_CASE("a particle whose volume turns non-positive stops the run with a clear
   Scene sc = build_scene(doc, "t", ".");
   const auto out = std::filesystem::temp_directory_path() / "smpm_test_failure";
   std::filesystem::remove_all(out);
-  const auto s = run_scene(sc, {out, 0, true});
+  const auto s = run_scene(sc, {out, 0, true, true, ""});
   CHECK(s.status == "failed");
   INFO(s.message);
   CHECK((has(s.message, "non-positive or NaN volume: particle") || has(s.message, "particle left the grid: particle")));
@@ -102,7 +102,7 @@ TEST_CASE("run.json reports the nodes the grid passes worked on: the occupied bo
   Scene sc = build_scene(doc, "t", ".");
   const auto out = std::filesystem::temp_directory_path() / "smpm_test_active_nodes";
   std::filesystem::remove_all(out);
-  const auto s = run_scene(sc, {out, 0, true});
+  const auto s = run_scene(sc, {out, 0, true, true, ""});
   REQUIRE(s.status == "completed");
   std::ifstream j(out / "run.json");
   const std::string json((std::istreambuf_iterator<char>(j)), std::istreambuf_iterator<char>());
@@ -151,7 +151,7 @@ TEST_CASE("L is stored only where asked: the same run, the statistics rows read 
   Scene sc2 = build_scene(doc2, "t", ".");
   const auto out = std::filesystem::temp_directory_path() / "smpm_test_store_gradient";
   std::filesystem::remove_all(out);
-  REQUIRE(run_scene(sc2, {out, 0, true}).status == "completed");
+  REQUIRE(run_scene(sc2, {out, 0, true, true, ""}).status == "completed");
   std::ifstream series(out / "series.csv");
   std::string line;
   std::getline(series, line);
@@ -301,4 +301,34 @@ TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear err
   CHECK_THROWS_WITH(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.scheme=\"musl\"",
                                                        "solver.strain_rate=\"midstep\""}),
                     Catch::Contains("'midstep' needs scheme 'usl' and an energy field"));
+}
+
+// Issue 16: sizes are checked before anything is allocated, and no input loops without end.
+// Each case here failed late or never before (a std::bad_alloc naming no key, a loop drawing
+// voids that remove no point, 21 GB of snapshots without a word).
+TEST_CASE("sizes checked before allocation: memory, voids, output", "[case]") {
+  auto voids = [](std::vector<std::string> sets) {
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/porous_strip.toml");
+    apply_overrides(doc, sets);
+    try {
+      build_scene(doc, "t", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    } catch (const CaseError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const auto grid = error_of({"grid.y_range_um=[0.0, 1e12]"});
+  CHECK(has(grid, "'grid.cell_size'"));
+  CHECK(has(grid, "run.max_memory_gb"));
+  CHECK(has(error_of({"run.max_memory_gb=0.001", "grid.y_range_um=[0.0, 4000.0]"}), "run.max_memory_gb' = 0.001"));
+  const auto body = error_of({"bodies.0.y_range_um=[0.0, 1e300]", "grid.y_range_um=[0.0, 60.0]"});
+  CHECK((has(body, "bodies[0].y_range") || has(body, "outside")));
+  const auto small = voids({"bodies.target.voids.radius_um=0.5"});
+  CHECK(has(small, "bodies[0].voids.radius': 0.5 um is below the point spacing 2 um"));
+  CHECK(has(voids({"bodies.target.voids.count=100000000"}), "allowed 0 to"));
+  CHECK(voids({"bodies.target.voids.radius_um=1e6"}) != "");  // refused at once, not after seconds
+  const auto out = voids({"run.snapshot_interval_ns=1e-4"});
+  CHECK(has(out, "'run.snapshot_interval'"));
+  CHECK(has(out, "run.max_output_gb"));
+  CHECK(voids({}) == "");
 }
