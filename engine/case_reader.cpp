@@ -40,6 +40,40 @@ std::string where(const toml::node& n) {
   return " (line " + std::to_string(s.begin.line) + ")";
 }
 
+// Edits (insert, delete, replace, swap of neighbours) from a to b, for "did you mean".
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i)
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] != b[j - 1])});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+// The candidate nearest to key, if near enough to be a typo of it (else empty).
+std::string nearest(const std::string& key, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t bd = std::max<std::size_t>(2, key.size() / 4) + 1;
+  for (const auto& c : candidates) {
+    const std::size_t e = edit_distance(key, c);
+    if (e < bd) {
+      bd = e;
+      best = c;
+    }
+  }
+  return best;
+}
+
+// A value as written in the case file, for messages ("abc" with its quotes).
+std::string shown(const toml::node& n) {
+  std::ostringstream o;
+  n.visit([&](const auto& v) { o << v; });  // a value, array or table as TOML writes it
+  return o.str();
+}
+
 std::optional<double> as_number(const toml::node& n) {
   if (auto v = n.value<double>()) return *v;  // integers convert too
   return std::nullopt;
@@ -59,6 +93,20 @@ void CaseReader::fail(const std::string& key, const std::string& msg) const {
   const std::string full = path_.empty() ? key : path_ + "." + key;
   const toml::node* n = t_->get(key);
   throw CaseError("case key '" + full + "'" + (n ? where(*n) : "") + ": " + msg);
+}
+
+void CaseReader::required(const std::vector<std::string>& spellings, const std::string& what) const {
+  const std::string prefix = path_.empty() ? "" : path_ + ".";
+  for (const auto& [k, v] : *t_) {
+    const std::string key(k.str());
+    if (std::find(used_.begin(), used_.end(), key) != used_.end()) continue;
+    const std::string near = nearest(key, spellings);
+    if (!near.empty())
+      throw CaseError("unknown key '" + key + "' in " + (path_.empty() ? "the top level" : "[" + path_ + "]") +
+                      where(v) + ": did you mean '" + near + "'? ('" + prefix + spellings.front() +
+                      "' is required: " + what + ")");
+  }
+  throw CaseError("case key '" + prefix + spellings.front() + "' is required (" + what + ")");
 }
 
 const toml::node* CaseReader::find(const std::string& key) {
@@ -101,12 +149,11 @@ double CaseReader::quantity(const std::string& key, const Quantity& q, double lo
     std::vector<std::string> names;
     for (const auto& [suf, ff] : q.suffixes) names.push_back(key + "_" + suf);
     if (names.empty()) names.push_back(key);
-    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + names.front() +
-                    "' is required (a " + q.what + "; accepted spellings: " + join(names) + ")");
+    required(names, "a " + std::string(q.what) + "; accepted spellings: " + join(names));
   }
   const toml::node* n = find(k);
   const auto v = as_number(*n);
-  if (!v) fail(k, "expected a number, got " + std::string(toml::impl::node_type_friendly_names[(int)n->type()]));
+  if (!v) fail(k, "expected a number, got " + shown(*n));
   const double si = *v * f;
   if (!std::isfinite(si) || si < lo || si > hi)
     fail(k, "value " + fmt(*v) + " is out of range: allowed " + fmt(lo / f) + " to " + fmt(hi / f));
@@ -129,13 +176,13 @@ std::pair<double, double> CaseReader::pair(const std::string& key, const Quantit
   if (k.empty()) {
     std::vector<std::string> names;
     for (const auto& [suf, ff] : q.suffixes) names.push_back(key + "_" + suf);
-    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + (names.empty() ? key : names.front()) +
-                    "' is required (two numbers, e.g. [0, 1]; accepted spellings: " + join(names) + ")");
+    if (names.empty()) names.push_back(key);
+    required(names, "two numbers, e.g. [0, 1]; accepted spellings: " + join(names));
   }
   const toml::node* n = find(k);
   const toml::array* a = n->as_array();
   if (!a || a->size() != 2 || !as_number(*a->get(0)) || !as_number(*a->get(1)))
-    fail(k, "expected two numbers, e.g. [0, 1]");
+    fail(k, "expected two numbers, e.g. [0, 1], got " + shown(*n));
   const double v0 = *as_number(*a->get(0)), v1 = *as_number(*a->get(1));
   if (!std::isfinite(v0) || !std::isfinite(v1)) fail(k, "values must be finite");
   if (increasing && !(v0 < v1)) fail(k, "[" + fmt(v0) + ", " + fmt(v1) + "]: the first value must be below the second");
@@ -157,9 +204,9 @@ std::pair<double, double> CaseReader::pair(const std::string& key, const Quantit
 
 double CaseReader::number(const std::string& key, double lo, double hi) {
   const toml::node* n = find(key);
-  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a number from " + fmt(lo) + " to " + fmt(hi) + ")");
+  if (!n) required({key}, "a number from " + fmt(lo) + " to " + fmt(hi));
   const auto v = as_number(*n);
-  if (!v) fail(key, "expected a number");
+  if (!v) fail(key, "expected a number, got " + shown(*n));
   if (!std::isfinite(*v) || *v < lo || *v > hi)
     fail(key, "value " + fmt(*v) + " is out of range: allowed " + fmt(lo) + " to " + fmt(hi));
   out_->insert_or_assign(key, *v);
@@ -176,9 +223,9 @@ double CaseReader::number(const std::string& key, double lo, double hi, double d
 
 long CaseReader::integer(const std::string& key, long lo, long hi) {
   const toml::node* n = find(key);
-  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ")");
+  if (!n) required({key}, "a whole number from " + std::to_string(lo) + " to " + std::to_string(hi));
   const auto v = n->value_exact<int64_t>();
-  if (!v) fail(key, "expected a whole number");
+  if (!v) fail(key, "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", got " + shown(*n));
   if (*v < lo || *v > hi)
     fail(key, "value " + std::to_string(*v) + " is out of range: allowed " + std::to_string(lo) + " to " + std::to_string(hi));
   out_->insert_or_assign(key, *v);
@@ -200,16 +247,16 @@ bool CaseReader::boolean(const std::string& key, bool def) {
     return def;
   }
   const auto v = n->value_exact<bool>();
-  if (!v) fail(key, "expected true or false");
+  if (!v) fail(key, "expected true or false, got " + shown(*n));
   out_->insert_or_assign(key, *v);
   return *v;
 }
 
 std::string CaseReader::string(const std::string& key) {
   const toml::node* n = find(key);
-  if (!n) throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (a string)");
+  if (!n) required({key}, "a string");
   const auto v = n->value_exact<std::string>();
-  if (!v) fail(key, "expected a string in quotes");
+  if (!v) fail(key, "expected a string in quotes, got " + shown(*n));
   out_->insert_or_assign(key, *v);
   return *v;
 }
@@ -223,8 +270,7 @@ std::string CaseReader::string(const std::string& key, const std::string& def) {
 }
 
 std::string CaseReader::choice(const std::string& key, const std::vector<std::string>& allowed) {
-  if (!t_->get(key))
-    throw CaseError("case key '" + (path_.empty() ? "" : path_ + ".") + key + "' is required (one of " + join(allowed) + ")");
+  if (!t_->get(key)) required({key}, "one of " + join(allowed));
   const std::string v = string(key);
   if (std::find(allowed.begin(), allowed.end(), v) == allowed.end())
     fail(key, "'" + v + "' is not a valid choice: allowed " + join(allowed));
@@ -291,8 +337,15 @@ void CaseReader::finish() const {
   for (const auto& [k, v] : *out_) known.push_back(std::string(k.str()));
   std::sort(known.begin(), known.end());
   known.erase(std::unique(known.begin(), known.end()), known.end());
+  std::string hint;
+  for (const auto& u : unknown) {
+    const std::string near = nearest(u, known);
+    if (!near.empty())
+      hint += (hint.empty() ? "; did you mean " : ", ") + ("'" + near + "'") + (unknown.size() > 1 ? " for '" + u + "'" : "");
+  }
+  if (!hint.empty()) hint += "?";
   throw CaseError("unknown key" + std::string(unknown.size() > 1 ? "s " : " ") + join(unknown) + " in " +
-                  (path_.empty() ? "the top level" : "[" + path_ + "]") + "; the keys read here are " + join(known));
+                  (path_.empty() ? "the top level" : "[" + path_ + "]") + hint + "; the keys read here are " + join(known));
 }
 
 toml::table parse_case_file(const std::filesystem::path& file) {

@@ -67,6 +67,9 @@ class CaseReader {
   const toml::node* find(const std::string& key);
   std::pair<std::string, double> find_quantity(const std::string& key, const Quantity& q);
   [[noreturn]] void fail(const std::string& key, const std::string& msg) const;
+  // A required key is missing: a key of the table near one of its spellings (a typo) is named
+  // as the unknown key it is, with the spelling meant; else "is required (what)".
+  [[noreturn]] void required(const std::vector<std::string>& spellings, const std::string& what) const;
   static const toml::table& empty();
 
   const toml::table* t_;

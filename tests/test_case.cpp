@@ -332,3 +332,25 @@ TEST_CASE("sizes checked before allocation: memory, voids, output", "[case]") {
   CHECK(has(out, "run.max_output_gb"));
   CHECK(voids({}) == "");
 }
+
+// Issue 16: a typo'd key is named as the unknown key it is, with the spelling meant (also when
+// the key it misspells is required); a value of the wrong type is shown as written.
+TEST_CASE("typos: the unknown key and the spelling meant; wrong types show the value", "[case]") {
+  CHECK(has(error_of({"solver.shap=\"cubic\""}), "unknown key 'shap' in [solver]; did you mean 'shape'?"));
+  CHECK(has(error_of({"solver.cfl=\"abc\""}), "'solver.cfl': expected a number, got 'abc'"));
+  CHECK(has(error_of({"solver.scheme=3"}), "expected a string in quotes, got 3"));
+  auto doc = toml::parse(kCase);
+  auto& grid = *doc["grid"].as_table();
+  const auto h = grid["cell_size_um"].value<double>();
+  REQUIRE(h);
+  grid.erase("cell_size_um");
+  grid.insert("cel_size_um", *h);
+  std::string msg;
+  try {
+    build_scene(doc, "t", ".");
+  } catch (const CaseError& e) {
+    msg = e.what();
+  }
+  CHECK(has(msg, "unknown key 'cel_size_um' in [grid]"));
+  CHECK(has(msg, "did you mean 'cell_size_um'?"));
+}
