@@ -57,7 +57,9 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   if (cfg_.strain_rate == StrainRate::Midstep && !can_mid)
     throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl' and an "
                                 "energy field (a Mie-Grueneisen material or heat conduction); use 'auto' or 'updated'");
-  midstep_ = cfg_.strain_rate != StrainRate::Updated && can_mid;
+  const bool mid_default = cfg_.transfer == Transfer::APIC &&
+                           (cfg_.shape == kern::ShapeKind::Quadratic || cfg_.shape == kern::ShapeKind::Cubic);
+  midstep_ = can_mid && (cfg_.strain_rate == StrainRate::Midstep || (cfg_.strain_rate == StrainRate::Auto && mid_default));
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
   key_.resize(n);

@@ -26,9 +26,11 @@ enum class Transfer { APIC, FLIP };
 // (Particles::field), welded where they fill a node (kern::grid_contact).
 enum class VoidFaces { SingleField, Separate };
 // Velocity of the USL strain rate: the node's mid-step velocity (energy-conserving step, not
-// symplectic: needs the damping of APIC or viscosity; APIC with an energy field only) or the
-// updated one (symplectic, loses dt^2 |f|^2 / 2m per node and step). Auto: mid-step where it is
-// available (shock runs), else updated (kern::g2p_particle, docs/method.md).
+// symplectic: needs the damping of APIC or viscosity; with the heating gather only, APIC or FLIP
+// with an energy field) or the updated one (symplectic, loses dt^2 |f|^2 / 2m per node and
+// step). Auto: mid-step with APIC and the quadratic or cubic B-spline (shock runs), else
+// updated: with FLIP, uGIMP or the linear hat the mid-step rate conserves energy but puts the
+// dense Hugoniot state off by 2.5-30 % (docs/accuracy.md; kern::g2p_particle, docs/method.md).
 enum class StrainRate { Auto, Midstep, Updated };
 // USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
 // updated particles.

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The output directory as a user meets it (issue 16): run.json's provenance; an earlier run's
+# The output directory as a user meets it (issue 16): run.json's provenance; case_resolved.toml
+# reruns to the same result; an earlier run's
 # results are never replaced without --overwrite; --overwrite clears that run's outputs (stale
 # figures/, a killed run's .tmp files) and keeps the user's own files; a write that fails (a
 # full disk, emulated by /dev/full) ends the run with exit 1 and run.json "failed" naming the
@@ -22,6 +23,13 @@ for k in ("git_commit", "git_dirty", "compiler", "build_type", "cxx_flags", "dat
 assert "--out" in p["command_line"] and "quickstart.toml" in p["command_line"], p["command_line"]
 PY
 cp "$TMP/a/run.json" "$TMP/run.json.first"
+
+# case_resolved.toml runs again, anywhere, to the same result (same threads: bitwise)
+cp "$TMP/a/case_resolved.toml" "$TMP/again.toml"
+"$EXE" run "$TMP/again.toml" --quiet --threads 2 --out "$TMP/again" > /dev/null 2>&1 || say "case_resolved.toml did not run"
+for f in energy.csv series.csv front.csv wall.csv; do
+  cmp -s "$TMP/a/$f" "$TMP/again/$f" || say "case_resolved.toml: $f differs from the first run's"
+done
 
 # again without --overwrite: refused (exit 2), nothing of the earlier run touched
 run --out "$TMP/a" > /dev/null 2> "$TMP/err"; rc=$?

@@ -296,7 +296,11 @@ TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear err
   };
   CHECK(sim_for("dense_impact_1000.toml", {}).midstep());
   CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.strain_rate=\"updated\""}).midstep());
-  CHECK(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());  // FLIP heats too
+  // FLIP and uGIMP: updated by default (the dense Hugoniot, docs/accuracy.md), mid-step on request
+  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());
+  CHECK(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}).midstep());
+  CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.shape=\"ugimp\""}).midstep());
+  CHECK(sim_for("dense_impact_1000.toml", {"solver.shape=\"cubic\""}).midstep());
   CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.scheme=\"musl\""}).midstep());
   CHECK_THROWS_WITH(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.scheme=\"musl\"",
                                                        "solver.strain_rate=\"midstep\""}),

@@ -194,7 +194,7 @@ TEST_CASE("determinism: porous two-body shock, bitwise identical with 1 and 2 th
 TEST_CASE("two-body contact with friction conserves energy, APIC and FLIP", "[verification][contact]") {
   for (const char* transfer : {"\"apic\"", "\"flip\""}) {
     auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/dense_symmetric_1000.toml");
-    apply_overrides(doc, {std::string("solver.transfer=") + transfer, "contact.friction=0.3",
+    apply_overrides(doc, {std::string("solver.transfer=") + transfer, "solver.strain_rate=\"midstep\"", "contact.friction=0.3",
                           "bodies.target.velocity_m_s=[300.0, -2000.0]", "bodies.flyer.velocity_m_s=[-300.0, 2000.0]"});
     const Scene sc = build_scene(doc, "contact energy", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
     Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);

@@ -7,7 +7,7 @@
 // allocates much.
 //
 // Deterministic: mutation k uses seed k, so a failure names the input that reproduces it.
-// Bounded by time: SHOCKMPM_FUZZ_SECONDS (default 20) or SHOCKMPM_FUZZ_INPUTS, whichever ends
+// Bounded by time: SHOCKMPM_FUZZ_SECONDS (default 10) or SHOCKMPM_FUZZ_INPUTS, whichever ends
 // first. With a libFuzzer or AFL++ build this would be a coverage-guided target; the Debian
 // toolchain here (g++ 12) has neither, so this is a plain random mutator.
 #include <catch2/catch.hpp>
@@ -102,7 +102,7 @@ TEST_CASE("fuzz: mutated case files end in a scene or a CaseError, never anythin
   REQUIRE(seeds.size() >= 10);
   const char* sec = std::getenv("SHOCKMPM_FUZZ_SECONDS");
   const char* cnt = std::getenv("SHOCKMPM_FUZZ_INPUTS");
-  const double budget = sec ? std::atof(sec) : 20.0;
+  const double budget = sec ? std::atof(sec) : 10.0;
   const long max_inputs = cnt ? std::atol(cnt) : std::numeric_limits<long>::max();
   const auto t0 = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
