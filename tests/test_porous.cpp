@@ -167,7 +167,8 @@ TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][p
 // uGIMP, for voids of radius 2 cells, and for the symmetric two-body collision at +-2000 m/s
 // (no wall: the impact plane is a symmetry plane), with APIC and with FLIP (uGIMP and FLIP with
 // the mid-step strain rate asked for: their default is the updated one, docs/accuracy.md). Measured over the full 100 ns with the
-// driver: 1e-10 relative or better in each (docs/verification.md); run here for 20 ns.
+// driver: 1e-10 relative or better in each (docs/verification.md); run here for 10 ns (the
+// balance is exact per step; FLIP cubic measured with the driver only).
 TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, FLIP", "[verification][porous]") {
   struct Variant {
     const char* file;
@@ -180,7 +181,6 @@ TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, 
       {"porous_symmetric_1000.toml", {"bodies.target.velocity_m_s=[0.0, -2000.0]"}},
       // FLIP (the 0.99 blend): its transfers' loss heats the points too (kern::g2p_particle)
       {"porous_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}},
-      {"porous_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.shape=\"cubic\"", "solver.strain_rate=\"midstep\""}},
       {"porous_symmetric_1000.toml",
        {"bodies.target.velocity_m_s=[0.0, -2000.0]", "solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}},
   };
@@ -191,7 +191,7 @@ TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, 
     REQUIRE(sc.solver.void_faces == VoidFaces::Separate);
     Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
     const double E0 = sim.energy().total();
-    while (sim.time() < 20e-9) sim.step(20e-9 - sim.time());
+    while (sim.time() < 10e-9) sim.step(10e-9 - sim.time());
     const double dE = sim.energy().total() / E0 - 1.0;
     WARN(v.file << " " << v.sets.back() << ": energy change " << dE << ", wall took " << sim.removed().wall
                 << " J/m, welds " << sim.removed().contact << " J/m, all heat");
