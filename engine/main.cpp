@@ -69,12 +69,23 @@ int main(int argc, char** argv) {
   run->add_flag("--quiet", quiet, "no progress lines");
   run->add_flag("--overwrite", overwrite,
                 "replace the results of an earlier run in the output directory (refused without it)");
+  std::string resume_dir;
+  auto* resume = app.add_subcommand("resume", "continue an interrupted run from its last checkpoint");
+  resume->add_option("dir", resume_dir, "the run's output directory")->required();
+  resume->add_option("--threads", threads, "OpenMP threads (default: OMP_NUM_THREADS or all cores)")->check(CLI::Range(1, 1024));
+  resume->add_flag("--quiet", quiet, "no progress lines");
   auto* check = app.add_subcommand("check", "validate a case and print what a run would do");
   check->add_option("case", case_file, "case file (TOML)")->required();
   check->add_option("--set", sets, "override a case value: section.key=value (TOML syntax)");
   CLI11_PARSE(app, argc, argv);
 
   try {
+    if (resume->parsed()) {
+      const smpm::RunOptions opt{resume_dir, threads, quiet, false, command_line(argc, argv)};
+      const auto s = smpm::resume_run(resume_dir, opt);
+      if (s.output_failed) return 1;
+      return s.status == "completed" ? 0 : 3;
+    }
     auto doc = smpm::parse_case_file(case_file);
     smpm::apply_overrides(doc, sets);
     const std::filesystem::path path(case_file);

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <limits>
 #include <numeric>
+#include <sstream>
 #include <stdexcept>
 #include <system_error>
 #include <utility>
@@ -145,12 +146,21 @@ struct H5File {
     check(a.close(), "H5Aclose", what);
   }
 
+  // An object creation property list without modification times: the same data give the same
+  // file, byte for byte (a resumed run's snapshots equal an uninterrupted run's).
+  H5Id untimed(hid_t cls, const std::string& what) const {
+    H5Id p = own(H5Pcreate(cls), H5Pclose, "H5Pcreate", what);
+    check(H5Pset_obj_track_times(p.get(), 0), "H5Pset_obj_track_times", what);
+    return p;
+  }
+
   // Creates dataset `path` (relative to loc) of the given shape and writes `data` (may be null
   // when the dataset is empty).
   H5Id dataset(hid_t loc, const char* path, const hsize_t* dims, int rank, hid_t file_type,
                hid_t mem_type, const void* data, const std::string& what) const {
     H5Id space = own(H5Screate_simple(rank, dims, nullptr), H5Sclose, "H5Screate_simple", what);
-    H5Id d = own(H5Dcreate2(loc, path, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+    H5Id dcpl = untimed(H5P_DATASET_CREATE, what);
+    H5Id d = own(H5Dcreate2(loc, path, file_type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
                  H5Dclose, "H5Dcreate2", what);
     if (dims[0] > 0) {
       check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "H5Dwrite", what);
@@ -173,7 +183,7 @@ void write_snapshot_file(const fs::path& path, const std::vector<SnapshotField>&
   H5Id file = f.own(H5Fcreate(f.name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
                     "H5Fcreate");
   {
-    H5Id grp = f.own(H5Gcreate2(file.get(), "/particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+    H5Id grp = f.own(H5Gcreate2(file.get(), "/particles", H5P_DEFAULT, f.untimed(H5P_GROUP_CREATE, "group /particles").get(), H5P_DEFAULT),
                      H5Gclose, "H5Gcreate2", "group /particles");
     const std::int64_t step64 = step;
     f.scalar_attribute(grp.get(), "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time_s);
@@ -209,7 +219,7 @@ void write_snapshot_file(const fs::path& path, const std::vector<SnapshotField>&
   }
   {
     const std::string what = "dataset /topology/polyvertex";
-    H5Id grp = f.own(H5Gcreate2(file.get(), "/topology", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+    H5Id grp = f.own(H5Gcreate2(file.get(), "/topology", H5P_DEFAULT, f.untimed(H5P_GROUP_CREATE, "group /topology").get(), H5P_DEFAULT),
                      H5Gclose, "H5Gcreate2", "group /topology");
     const hsize_t dims[1] = {static_cast<hsize_t>(n)};
     H5Id d;
@@ -341,6 +351,46 @@ void SnapshotWriter::write(const std::vector<SnapshotField>& fields, std::size_t
   write_xdmf();
 }
 
+std::string SnapshotWriter::index_text() const {
+  std::ostringstream o;
+  o.precision(17);
+  for (const Entry& e : entries_) {
+    o << e.file << ' ' << e.step << ' ' << e.time << ' ' << e.n << ' ' << e.index64 << ' ' << e.fields.size();
+    for (const auto& f : e.fields) o << ' ' << f.name << ' ' << f.components;
+    o << '\n';
+  }
+  return o.str();
+}
+
+void SnapshotWriter::adopt(const std::string& index_text) {
+  std::vector<Entry> entries;
+  std::istringstream in(index_text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream l(line);
+    Entry e;
+    std::size_t nf = 0;
+    l >> e.file >> e.step >> e.time >> e.n >> e.index64 >> nf;
+    for (std::size_t k = 0; k < nf && l; ++k) {
+      FieldInfo f;
+      l >> f.name >> f.components;
+      e.fields.push_back(f);
+    }
+    if (!l || e.file != snapshot_name(e.step))
+      throw std::runtime_error("snapshot index of a checkpoint: unreadable entry '" + line + "'");
+    entries.push_back(std::move(e));
+  }
+  entries_ = std::move(entries);
+  files_.clear();
+  for (const Entry& e : entries_) files_.push_back(dir_ / e.file);
+  for (const auto& f : fs::directory_iterator(dir_)) {
+    const auto name = f.path().filename().string();
+    const bool listed = std::any_of(entries_.begin(), entries_.end(), [&](const Entry& e) { return e.file == name; });
+    if (!listed && name.rfind("snap_", 0) == 0 && f.path().extension() == ".h5") fs::remove(f.path());
+  }
+  write_xdmf();
+}
+
 void SnapshotWriter::write_xdmf() const {
   std::string s;
   s.reserve(1024 + 2048 * entries_.size());
@@ -410,7 +460,7 @@ void write_table_h5(const fs::path& file, const std::string& group, const std::v
     const H5File f{tmp.string()};
     H5Id h = f.own(H5Fcreate(f.name.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "H5Fcreate");
     const std::string gname = "/" + group;
-    H5Id grp = f.own(H5Gcreate2(h.get(), gname.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
+    H5Id grp = f.own(H5Gcreate2(h.get(), gname.c_str(), H5P_DEFAULT, f.untimed(H5P_GROUP_CREATE, "group " + gname).get(), H5P_DEFAULT), H5Gclose,
                      "H5Gcreate2", "group " + gname);
     for (const auto& [k, v] : attributes) f.string_attribute(grp.get(), k.c_str(), v, "group " + gname);
     for (std::size_t c = 0; c < columns.size(); ++c) {

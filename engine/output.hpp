@@ -50,6 +50,12 @@ class SnapshotWriter {
   // must contain "position" with 2 components. Writing a step again replaces that snapshot.
   void write(const std::vector<SnapshotField>& fields, std::size_t n, double time_s, long step);
 
+  // The index (what particles.xdmf lists) as text, for a checkpoint; adopt() takes such a text
+  // back when a run resumes: the index becomes that list, particles.xdmf is rewritten and the
+  // snapshot files of the directory it does not list (written after the checkpoint) are removed.
+  std::string index_text() const;
+  void adopt(const std::string& index_text);
+
   // Snapshot files written so far, in the order first written.
   const std::vector<std::filesystem::path>& files() const { return files_; }
 

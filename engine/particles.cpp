@@ -73,14 +73,8 @@ std::size_t Particles::bytes() const {
 }
 
 std::vector<std::string> Particles::fields_in_use() const {
-  std::vector<std::string> names{"x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "Lxx", "Lxy", "Lyx", "Lyy"};
-  const std::pair<const char*, const std::vector<double>*> optional[] = {
-      {"Cxx", &Cxx}, {"Cxy", &Cxy}, {"Cyx", &Cyx}, {"Cyy", &Cyy}, {"e", &e}, {"epsp", &epsp}, {"q", &q}, {"wp", &wp}};
-  for (const auto& [name, v] : optional)
-    if (!v->empty()) names.emplace_back(name);
-  names.emplace_back("id");
-  names.emplace_back("body");
-  if (!field.empty()) names.emplace_back("field");
+  std::vector<std::string> names;
+  const_cast<Particles&>(*this).each_array([&](const char* name, const auto&) { names.emplace_back(name); });
   return names;
 }
 

@@ -45,6 +45,19 @@ struct Particles {
   std::size_t bytes() const;
   // Names of the arrays in use (the optional ones only when allocated), as in this struct.
   std::vector<std::string> fields_in_use() const;
+  // f(name, array) for every array in use, in the order of fields_in_use (checkpoints).
+  template <class F>
+  void each_array(F&& f) {
+    const char* names[] = {"x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "Lxx", "Lxy", "Lyx", "Lyy",
+                           "Cxx", "Cxy", "Cyx", "Cyy", "e", "epsp", "q", "wp"};
+    std::vector<double>* arrays[] = {&x, &y, &vx, &vy, &m, &V, &sxx, &syy, &sxy, &p, &Lxx, &Lxy, &Lyx, &Lyy,
+                                     &Cxx, &Cxy, &Cyx, &Cyy, &e, &epsp, &q, &wp};
+    for (int k = 0; k < 22; ++k)
+      if (k < 14 || !arrays[k]->empty()) f(names[k], *arrays[k]);
+    f("id", id);
+    f("body", body);
+    if (!field.empty()) f("field", field);
+  }
   void append(const Particles& o);
 };
 

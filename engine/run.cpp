@@ -4,6 +4,8 @@
 #include <sys/resource.h>
 
 #include <atomic>
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <csignal>
 #include <cmath>
@@ -13,9 +15,11 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "engine/case_reader.hpp"
+#include "engine/checkpoint.hpp"
 #include "engine/diagnostics.hpp"
 #include "engine/output.hpp"
 #include "engine/provenance.hpp"
@@ -45,14 +49,14 @@ void flush_checked(std::ofstream& o, const std::filesystem::path& file) {
 // What a run writes into its output directory (and nothing else is removed by --overwrite).
 const char* const kOutputFiles[] = {"run.json", "case_resolved.toml", "energy.csv", "series.csv", "series.h5",
                                     "front.csv", "wall.csv", "voids.csv"};
-const char* const kOutputDirs[] = {"fields", "figures"};
+const char* const kOutputDirs[] = {"fields", "figures", "checkpoint"};
 
-// Before a run writes: an earlier run's outputs (only with overwrite, check_output_dir) and
-// any partial .tmp file of a killed run go.
+// Before a run writes: an earlier run's outputs (only with overwrite; a new run without it
+// was refused by check_output_dir before the scene was built) and any partial .tmp file of a
+// killed run go. A resumed run keeps its outputs (resume_run truncates them to its checkpoint).
 void clear_output_dir(const std::filesystem::path& out, bool overwrite) {
   namespace fs = std::filesystem;
-  if (fs::exists(out / "run.json") && !overwrite) check_output_dir(out, overwrite);  // throws
-  for (const fs::path& d : {out, out / "fields"}) {
+  for (const fs::path& d : {out, out / "fields", out / "checkpoint"}) {
     std::error_code ec;
     if (!fs::is_directory(d, ec)) continue;
     for (const auto& f : fs::directory_iterator(d))
@@ -281,22 +285,64 @@ void check_output_dir(const std::filesystem::path& out, bool overwrite) {
                     "replace its results, or choose another --out");
 }
 
-RunSummary run_scene(Scene& scene, const RunOptions& opt) {
+namespace {
+
+// A CSV file of the run: a new run writes its header; a resumed one cuts the file back to its
+// length at the checkpoint (rows written after it go) and appends.
+void open_csv(std::ofstream& o, const std::filesystem::path& file, const char* header,
+              const CheckpointReader* resume) {
+  if (!resume) {
+    o.open(file);
+    o << header;
+    return;
+  }
+  const auto key = "csv/" + file.filename().string();
+  const auto length = static_cast<std::uintmax_t>(resume->integer(key));
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec) || std::filesystem::file_size(file, ec) < length)
+    throw CaseError("cannot resume: " + file.string() + " is missing or shorter than at the checkpoint (" +
+                    std::to_string(length) + " bytes)");
+  std::filesystem::resize_file(file, length, ec);
+  if (ec) throw OutputError("cannot cut " + file.string() + " back to its checkpoint length: " + ec.message());
+  o.open(file, std::ios::app);
+}
+
+// The run loop; `resume`: the checkpoint it continues from (resume_run), or null for a new run.
+RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader* resume) {
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
   const int threads = omp_get_max_threads();
   const auto out = output_dir(opt, scene.name);
-  const toml::table prov = provenance(opt.command_line, threads);
+  // provenance: the first run's, and one entry per resume in "restarts"
+  toml::table prov = provenance(opt.command_line, threads);
+  if (resume) {
+    toml::table first = toml::parse(resume->text("run/provenance"));
+    if (!first.contains("restarts")) first.insert("restarts", toml::array{});
+    // the bitwise claim holds for the same build: say when this one is another
+    const toml::table* last = first["restarts"].as_array()->empty()
+                                  ? &first
+                                  : first["restarts"].as_array()->back().as_table();
+    for (const char* k : {"git_commit", "git_dirty", "compiler", "cxx_flags", "build_type"})
+      if (last && (*last)[k].value<std::string>() != prov[k].value<std::string>())
+        std::fprintf(stderr, "warning: the checkpoint was written by another build (%s '%s', now '%s'): the run "
+                     "goes on, but its steps may differ from an uninterrupted run's in the last bits\n", k,
+                     (*last)[k].value_or(std::string("?")).c_str(), prov[k].value_or(std::string("?")).c_str());
+    prov.insert("from_step", resume->integer("sim/steps"));
+    first["restarts"].as_array()->push_back(std::move(prov));
+    prov = std::move(first);
+  }
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
+  if (resume) sim.restore(*resume);
   // a run owns its output directory: an earlier run's results there go (--overwrite), now
   // that this one is built and about to write its own
   std::filesystem::create_directories(out);
-  clear_output_dir(out, opt.overwrite);
-  {
+  clear_output_dir(out, opt.overwrite && !resume);
+  if (!resume) {
     std::ofstream c(out / "case_resolved.toml");
     c << resolved_case_text(scene);
     flush_checked(c, out / "case_resolved.toml");
   }
   SnapshotWriter snaps(out / "fields");
+  if (resume) snaps.adopt(resume->text("run/snapshots"));
   RunSummary s;
   // the compression front runs through the target: the body named "target", else body 0
   const std::size_t target = scene.target;
@@ -304,8 +350,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   // at every snapshot; pixels a quarter of the point spacing (open_area)
   std::ofstream voids;
   if (scene.bodies[target].voids > 0) {
-    voids.open(out / "voids.csv");
-    voids << "time_ns,region,open_area_um2,open_fraction\n" << std::setprecision(8);
+    open_csv(voids, out / "voids.csv", "time_ns,region,open_area_um2,open_fraction\n", resume);
+    voids << std::setprecision(8);
   }
   auto write_voids = [&] {
     if (!voids.is_open()) return;
@@ -333,17 +379,21 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
     write_voids();
   };
   // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
-  std::ofstream series(out / "series.csv");
-  series << "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"
-            "Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,T_skew,T_kurt,rho_skew,"
-            "rho_kurt,Uy_skew,Uy_kurt,R_mean_per_us,D_mean_per_us,open_porosity\n"
-         << std::setprecision(8);
+  std::ofstream series;
+  open_csv(series, out / "series.csv",
+           "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"
+           "Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,T_skew,T_kurt,rho_skew,"
+           "rho_kurt,Uy_skew,Uy_kurt,R_mean_per_us,D_mean_per_us,open_porosity\n",
+           resume);
+  series << std::setprecision(8);
   const std::vector<std::string> columns{"time_ns", "region", "count", "P_mean_GPa", "P_std_GPa", "T_mean_K",
                                          "T_std_K", "rho_mean_gcc", "rho_std_gcc", "Uy_mean_ms", "Uy_std_ms",
                                          "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2", "P_skew", "P_kurt",
                                          "T_skew", "T_kurt", "rho_skew", "rho_kurt", "Uy_skew", "Uy_kurt",
                                          "R_mean_per_us", "D_mean_per_us", "open_porosity"};
   std::vector<std::vector<double>> table(columns.size());
+  if (resume)
+    for (std::size_t c = 0; c < columns.size(); ++c) resume->get("series/" + columns[c], table[c]);
   std::string region_names;
   for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
   auto write_series = [&] {
@@ -376,8 +426,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   const double vy0 = scene.bodies[target].vy0;
   std::ofstream front;
   if (vy0 != 0.0) {
-    front.open(out / "front.csv");
-    front << "time_ns,front_y_um\n" << std::setprecision(10);
+    open_csv(front, out / "front.csv", "time_ns,front_y_um\n", resume);
+    front << std::setprecision(10);
   }
   auto write_front = [&] {
     if (vy0 == 0.0) return;
@@ -389,16 +439,18 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       flush_checked(front, out / "front.csv");
     }
   };
-  std::ofstream energy(out / "energy.csv");
-  energy << "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m,"
-            "wall_removed_J_per_m,contact_removed_J_per_m,residual_J_per_m\n";
-  const double E0 = sim.energy().total();
+  std::ofstream energy;
+  open_csv(energy, out / "energy.csv",
+           "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m,"
+           "wall_removed_J_per_m,contact_removed_J_per_m,residual_J_per_m\n",
+           resume);
+  const double E0 = resume ? resume->number("run/E0") : sim.energy().total();
   energy << std::setprecision(12);
   const bool has_wall = scene.solver.walls.bottom != kern::Wall::None;
   std::ofstream wall;
   if (has_wall) {
-    wall.open(out / "wall.csv");
-    wall << "time_ns,wall_stress_GPa\n" << std::setprecision(10);
+    open_csv(wall, out / "wall.csv", "time_ns,wall_stress_GPa\n", resume);
+    wall << std::setprecision(10);
   }
   auto write_energy = [&] {
     Timed t(s.diagnostics_seconds);
@@ -413,6 +465,8 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   };
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads, prov);
+  const double t_resumed = sim.time();
+  const double steps_before = resume ? resume->number("run/particle_steps") : 0.0;
   if (!opt.quiet) {
     const double dt0 = sim.stable_dt();
     std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
@@ -430,20 +484,61 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   const double eps = 1e-12 * std::max(t_end, 1e-30);
   double next_snap = 0.0, next_energy = 0.0;
   const double wall0 = omp_get_wtime();
-  double last_progress = wall0;
-  double particle_steps = 0.0;
+  double last_progress = wall0, last_checkpoint = wall0;
+  double particle_steps = 0.0, wall_before = 0.0;  // of the runs before a resume
   const double n = static_cast<double>(sim.particles().size());
+  const std::pair<const char*, std::ofstream*> csvs[] = {
+      {"energy.csv", &energy}, {"series.csv", &series}, {"front.csv", &front}, {"wall.csv", &wall}, {"voids.csv", &voids}};
+  // the whole state at a step boundary, every output of the step written (engine/checkpoint.hpp);
+  // the last two are kept
+  auto write_checkpoint = [&] {
+    Timed t(s.output_seconds);
+    CheckpointWriter w(checkpoint_path(out, sim.steps()));
+    w.put("run/case_name", scene.name);
+    w.put("run/case_text", resolved_case_text(scene));
+    {
+      std::ostringstream p;
+      p << prov;
+      w.put("run/provenance", p.str());
+    }
+    sim.save(w);
+    w.put("run/E0", E0);
+    w.put("run/next_snap", next_snap);
+    w.put("run/next_energy", next_energy);
+    w.put("run/particle_steps", particle_steps);
+    w.put("run/wall_seconds", wall_before + omp_get_wtime() - wall0);
+    w.put("run/diagnostics_seconds", s.diagnostics_seconds);
+    w.put("run/output_seconds", s.output_seconds);
+    for (std::size_t c = 0; c < columns.size(); ++c) w.put("series/" + columns[c], table[c]);
+    w.put("run/snapshots", snaps.index_text());
+    for (const auto& [name, o] : csvs)
+      if (o->is_open()) w.put(std::string("csv/") + name, static_cast<std::int64_t>(o->tellp()));
+    w.commit();
+    const auto all = list_checkpoints(out);
+    for (std::size_t k = 0; k + 2 < all.size(); ++k) std::filesystem::remove(all[k]);
+  };
   try {
-    snapshot();
-    next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
-    write_energy();
-    write_series();
-    next_energy = scene.run.diagnostics_interval;
+    if (resume) {
+      next_snap = resume->number("run/next_snap");
+      next_energy = resume->number("run/next_energy");
+      particle_steps = resume->number("run/particle_steps");
+      wall_before = resume->number("run/wall_seconds");
+      s.diagnostics_seconds = resume->number("run/diagnostics_seconds");
+      s.output_seconds = resume->number("run/output_seconds");
+    } else {
+      snapshot();
+      next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
+      write_energy();
+      write_series();
+      next_energy = scene.run.diagnostics_interval;
+    }
     while (sim.time() < t_end - eps) {
       if (const int sig = g_stop_signal) {
         s.status = "interrupted";
         s.message = std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at step " +
                     std::to_string(sim.steps());
+        write_checkpoint();
+        s.message += "; checkpoint written: continue with `shockmpm resume " + out.string() + "`";
         break;
       }
       if (scene.run.max_steps > 0 && sim.steps() >= scene.run.max_steps) {
@@ -475,12 +570,17 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
         next_snap += scene.run.snapshot_interval;
       }
       const double now = omp_get_wtime();
+      if (scene.run.checkpoint_interval > 0 && now - last_checkpoint >= scene.run.checkpoint_interval) {
+        write_checkpoint();
+        last_checkpoint = omp_get_wtime();
+      }
       if (!opt.quiet && now - last_progress >= scene.run.progress_interval) {
         last_progress = now;
-        const double frac = sim.time() / t_end, el = now - wall0;
+        const double frac = sim.time() / t_end, el = now - wall0;  // el: this process's
+        const double done = (sim.time() - t_resumed) / std::max(t_end - t_resumed, 1e-300);
         std::printf("step %8ld  t = %10.4g ns  dt = %9.3g ns  %5.1f %%  ETA %s  %.3g M particle-steps/s\n",
                     sim.steps(), sim.time() * 1e9, sim.last_dt() * 1e9, 100 * frac,
-                    hms(el * (1 - frac) / std::max(frac, 1e-12)).c_str(), particle_steps / el * 1e-6);
+                    hms(el * (1 - done) / std::max(done, 1e-12)).c_str(), (particle_steps - steps_before) / el * 1e-6);
         std::fflush(stdout);
       }
     }
@@ -488,6 +588,10 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       s.status = "completed";
       s.message = "reached end_time";
     }
+  } catch (const CheckpointError& e) {  // a checkpoint that could not be written
+    s.status = "failed";
+    s.message = e.what();
+    s.output_failed = true;
   } catch (const StepError& e) {
     s.status = "failed";
     s.message = e.what();
@@ -510,8 +614,13 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
       s.output_failed = true;
     }
   }
-  // wall time of the whole loop, first and last snapshots included
-  s.wall_seconds = omp_get_wtime() - wall0;
+  // a completed run needs no checkpoint (its last state is the last snapshot)
+  if (s.status == "completed") {
+    std::error_code ec;
+    std::filesystem::remove_all(out / "checkpoint", ec);
+  }
+  // wall time of the whole loop, first and last snapshots included (and of the runs before a resume)
+  s.wall_seconds = wall_before + omp_get_wtime() - wall0;
   s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
   try {
     write_run_json(out / "run.json", scene, sim, s, threads, prov);
@@ -529,6 +638,54 @@ RunSummary run_scene(Scene& scene, const RunOptions& opt) {
   // why a run stopped early goes to stderr, with --quiet too
   if (s.status != "completed") std::fprintf(stderr, "%s: %s\n", s.status.c_str(), s.message.c_str());
   return s;
+}
+
+}  // namespace
+
+RunSummary run_scene(Scene& scene, const RunOptions& opt) { return run_loop(scene, opt, nullptr); }
+
+RunSummary resume_run(const std::filesystem::path& out, const RunOptions& opt) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_directory(out, ec)) throw CaseError("cannot resume: '" + out.string() + "' is not a directory");
+  if (fs::exists(out / "run.json", ec)) {
+    std::ifstream j(out / "run.json");
+    std::stringstream text;
+    text << j.rdbuf();
+    std::string t = text.str();
+    t.erase(std::remove_if(t.begin(), t.end(), [](unsigned char c) { return std::isspace(c); }), t.end());
+    if (t.find("\"status\":\"completed\"") != std::string::npos)
+      throw CaseError("cannot resume: the run in '" + out.string() + "' completed (run.json); nothing to continue");
+  }
+  const auto all = list_checkpoints(out);
+  if (all.empty())
+    throw CaseError("cannot resume: '" + out.string() + "' holds no checkpoint (checkpoint/ckpt_*.bin); a run writes "
+                    "one every run.checkpoint_interval_s of wall time and when SIGINT or SIGTERM stops it");
+  // the newest whole checkpoint (a damaged one is named and the one before it tried)
+  std::unique_ptr<CheckpointReader> r;
+  for (auto it = all.rbegin(); it != all.rend() && !r; ++it) {
+    try {
+      r = std::make_unique<CheckpointReader>(*it);
+    } catch (const CheckpointError& e) {
+      std::fprintf(stderr, "warning: %s; trying the one before\n", e.what());
+    }
+  }
+  if (!r) throw CaseError("cannot resume: no checkpoint in '" + (out / "checkpoint").string() + "' is whole");
+  toml::table doc;
+  try {
+    doc = toml::parse(r->text("run/case_text"));
+  } catch (const toml::parse_error& e) {
+    throw CheckpointError("checkpoint " + r->file().string() + ": its case does not parse: " +
+                          std::string(e.description()));
+  }
+  Scene scene = build_scene(doc, r->text("run/case_name"), out);
+  RunOptions o = opt;
+  o.out_dir = out;
+  o.overwrite = false;
+  if (!opt.quiet)
+    std::printf("resuming %s from %s (step %lld)\n", scene.name.c_str(), r->file().string().c_str(),
+                static_cast<long long>(r->integer("sim/steps")));
+  return run_loop(scene, o, r.get());
 }
 
 }  // namespace smpm

@@ -39,6 +39,15 @@ struct RunSummary {
 
 RunSummary run_scene(Scene& scene, const RunOptions& opt);
 
+// `shockmpm resume DIR`: continues the run in DIR from its newest whole checkpoint
+// (DIR/checkpoint/ckpt_<step>.bin; the one before if the newest is damaged), with the case the
+// checkpoint carries. The CSV files are cut back to their length at the checkpoint and continue,
+// the snapshot index is that of the checkpoint (later snapshot files are removed), run.json's
+// provenance gains an entry under "restarts". The steps are bitwise those of an uninterrupted
+// run, at any thread count. opt.out_dir and opt.overwrite are ignored. Throws CaseError (exit 2)
+// when DIR has no checkpoint or its run completed.
+RunSummary resume_run(const std::filesystem::path& dir, const RunOptions& opt);
+
 // OUT/case_resolved.toml: the resolved case (every default filled in), which runs again as it
 // is: the materials are written whole, their library entry and file as comments.
 std::string resolved_case_text(const Scene& scene);

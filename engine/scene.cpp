@@ -148,6 +148,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
     s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
     s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
+    s.run.checkpoint_interval = r.number("checkpoint_interval_s", 0.0, 1e7, 300.0);
     // sizes are checked against these before anything is allocated (check_size)
     const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
     const double mem_default = phys > 0 ? 0.8 * phys / 1e9 : 16.0;

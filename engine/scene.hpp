@@ -21,6 +21,7 @@ struct RunControl {
   double diagnostics_interval = 0.0;  // [s]; rows of energy.csv and front.csv (0: every step)
   double progress_interval = 5.0;  // [s of wall time] between progress lines
   long max_steps = 0;              // 0: no limit
+  double checkpoint_interval = 300.0;  // [s of wall time] between checkpoints (0: only at SIGINT/SIGTERM)
   double max_memory = 0.0;         // [bytes] a case needing more is refused before allocation
   double max_output = 0.0;         // [bytes] snapshot volume above which a case is refused
 };

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "engine/checkpoint.hpp"
 #include "engine/diagnostics.hpp"
 #include "engine/timer.hpp"
 #include "engine/transfer_step.hpp"
@@ -358,6 +359,44 @@ Simulation::Energy Simulation::energy() const {
     }
   }
   return e;
+}
+
+void Simulation::save(CheckpointWriter& w) const {
+  const_cast<Particles&>(P_).each_array([&](const char* name, const auto& a) { w.put(std::string("p/") + name, a); });
+  std::string fields;
+  for (const auto& f : P_.fields_in_use()) fields += f + " ";
+  w.put("sim/fields", fields);
+  w.put("sim/steps", std::int64_t{steps_});
+  w.put("sim/gradient_step", std::int64_t{gradient_step_});
+  const std::vector<double> scalars{time_, dt_, last_dt_, max_speed_, box_nodes_, removed_.wall, removed_.contact,
+                                    wall_.left, wall_.right, wall_.bottom, wall_.top, times_.sort, times_.p2g,
+                                    times_.grid, times_.contact, times_.g2p, times_.constitutive, times_.heat};
+  w.put("sim/scalars", scalars);
+}
+
+void Simulation::restore(const CheckpointReader& r) {
+  std::string fields;
+  for (const auto& f : P_.fields_in_use()) fields += f + " ";
+  if (r.text("sim/fields") != fields)
+    throw CheckpointError("checkpoint " + r.file().string() + " holds the particle fields '" + r.text("sim/fields") +
+                          "', the case builds '" + fields + "': not a checkpoint of this case");
+  const std::size_t n = P_.size();
+  P_.each_array([&](const char* name, auto& a) {
+    r.get(std::string("p/") + name, a);
+    if (a.size() != n)
+      throw CheckpointError("checkpoint " + r.file().string() + " holds " + std::to_string(a.size()) +
+                            " particles, the case builds " + std::to_string(n) + ": not a checkpoint of this case");
+  });
+  steps_ = r.integer("sim/steps");
+  gradient_step_ = r.integer("sim/gradient_step");
+  std::vector<double> v;
+  r.get("sim/scalars", v);
+  if (v.size() != 18) throw CheckpointError("checkpoint " + r.file().string() + ": sim/scalars has " +
+                                            std::to_string(v.size()) + " values, expected 18");
+  time_ = v[0], dt_ = v[1], last_dt_ = v[2], max_speed_ = v[3], box_nodes_ = v[4];
+  removed_ = {v[5], v[6]};
+  wall_ = {v[7], v[8], v[9], v[10]};
+  times_ = {v[11], v[12], v[13], v[14], v[15], v[16], v[17]};
 }
 
 std::array<double, 2> Simulation::momentum() const {

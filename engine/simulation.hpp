@@ -16,6 +16,8 @@
 #include "kernels/shape.hpp"
 
 namespace smpm {
+class CheckpointWriter;
+class CheckpointReader;
 namespace transfer {
 struct StepArgs;
 }
@@ -133,6 +135,13 @@ class Simulation {
   };
   const Removed& removed() const { return removed_; }
   bool removed_is_heat() const { return transfer_heat(); }
+  // Checkpoints (engine/checkpoint.hpp): the particle arrays in use and the scalars that carry
+  // from step to step (time, step count, the next step's signal speed, removed energy, phase
+  // times). restore() takes them into a Simulation built from the same scene (same particle
+  // count and fields; else CheckpointError): the steps after it are bitwise those that would
+  // have followed save().
+  void save(CheckpointWriter& w) const;
+  void restore(const CheckpointReader& r);
   // Total momentum [kg m/s per metre].
   std::array<double, 2> momentum() const;
   std::size_t bytes() const;
