@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Summary table (markdown) of shockmpm study runs, one row per output directory.
 
-usage: scripts/study_summary.py OUTDIR [OUTDIR ...] [--region I] [--times-ns 1200 1500]
+usage: scripts/study_summary.py OUTDIR [OUTDIR ...] [--region I] [--times-ns 1200 1500] [--dir-names]
 
 Columns: porosity and impact speed (run.json); peak of the region's mean pressure and density
 (series.csv); mean temperature of the region at the given times (nearest row); compression-front
@@ -142,6 +142,8 @@ def main():
     ap.add_argument("outdirs", nargs="+")
     ap.add_argument("--region", default="I")
     ap.add_argument("--times-ns", nargs="+", type=float, default=[1200.0, 1500.0])
+    ap.add_argument("--dir-names", action="store_true",
+                    help="name each row by its output directory instead of its case (sweeps)")
     a = ap.parse_args()
     results = []
     regions = []
@@ -151,6 +153,8 @@ def main():
         except (OSError, KeyError, ValueError, json.JSONDecodeError) as e:
             print(f"skipping {od}: {e}", file=sys.stderr)
             continue
+        if a.dir_names:
+            r["case"] = os.path.basename(os.path.normpath(od))
         results.append(r)
         regions = regions or regs
     if not results:
