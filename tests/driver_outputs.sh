@@ -4,7 +4,8 @@
 # results are never replaced without --overwrite; --overwrite clears that run's outputs (stale
 # figures/, a killed run's .tmp files) and keeps the user's own files; a write that fails (a
 # full disk, emulated by /dev/full) ends the run with exit 1 and run.json "failed" naming the
-# file and the errno text.
+# file and the errno text; so does a write that fails at the first snapshot, the XDMF index,
+# series.h5 or a checkpoint.
 #   tests/driver_outputs.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"
@@ -53,6 +54,18 @@ for f in energy.csv series.csv wall.csv front.csv; do
   grep -Eq '"status" *: *"failed"' "$d/run.json" || say "$f on a full disk: run.json not 'failed'"
   grep -q "$f: No space left on device" "$d/run.json" || { say "$f: run.json does not name the file and errno:"; grep message "$d/run.json" >&2; }
   grep -q "No space left on device" "$TMP/err" || say "$f: nothing on stderr"
+done
+# a write that fails at each HDF5 / index / checkpoint output (its final name taken by a
+# directory, so the rename fails; the same path as a full disk in write-then-rename): exit 1,
+# run.json "failed" naming the file, the CSV rows before it whole
+for f in fields/snap_00000000.h5 fields/particles.xdmf series.h5 checkpoint; do
+  d="$TMP/block-${f//\//-}"; mkdir -p "$d/$f/x"
+  [ "$f" = checkpoint ] && { rm -r "$d/$f"; touch "$d/$f"; }  # a file where the directory goes
+  run --out "$d" --set run.snapshot_interval_ns=1.0 --set run.checkpoint_interval_s=1e-6 > /dev/null 2> "$TMP/err"; rc=$?
+  [ "$rc" = 1 ] || say "$f blocked: exit $rc, expected 1"
+  grep -Eq '"status" *: *"failed"' "$d/run.json" || say "$f blocked: run.json not 'failed'"
+  grep -q "$(basename "$f")" "$d/run.json" || { say "$f blocked: run.json does not name it:"; grep message "$d/run.json" >&2; }
+  grep -q "failed: " "$TMP/err" || say "$f blocked: nothing on stderr"
 done
 [ "$fail" = 0 ] && echo "driver_outputs: PASS" || echo "driver_outputs: FAIL"
 exit "$fail"
