@@ -9,7 +9,8 @@ which ends when a front at the Hugoniot speed would have crossed 70 % of the str
 front and pressure for the run's achieved porosity (run.json compacted_hugoniot: no strength,
 the material behind the front at rest and fully dense).
 
-  /usr/bin/python3 bench/compaction_hugoniot.py [--h 4] [--out DIR] [--driver build/shockmpm]
+  /usr/bin/python3 bench/compaction_hugoniot.py [--h 4,2] [--length-um 500] [--cases 0.5:2000,...]
+                   [--out DIR] [--driver build/shockmpm]
 
 Prints a markdown table (docs/accuracy.md, "Compaction against the porous Hugoniot").
 """
@@ -30,51 +31,102 @@ def rows(path):
         return list(csv.DictReader(f))
 
 
+def profile_edges(out, v, dy):
+    """Leading and trailing edge [um] of the wave in the last snapshot: where the mean U_y of the
+    target (bins dy um high) first departs from -v by 5 % and by 95 %, scanning down from the top."""
+    import glob
+    import h5py
+    snaps = sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5")))
+    if not snaps:
+        return float("nan"), float("nan")
+    with h5py.File(snaps[-1], "r") as f:
+        y = f["particles/position"][:, 1] * 1e6
+        uy = f["particles/velocity"][:, 1]
+    bins = np.arange(0.0, y.max() + dy, dy)
+    idx = np.digitize(y, bins)
+    mean = np.array([uy[idx == k].mean() if np.any(idx == k) else np.nan for k in range(1, len(bins))])
+    mid = 0.5 * (bins[1:] + bins[:-1])
+    lead = trail = float("nan")
+    for k in range(len(mean) - 1, -1, -1):  # from the top down
+        if not np.isfinite(mean[k]):
+            continue
+        if np.isnan(lead) and mean[k] > -0.95 * v:
+            lead = mid[k]
+        if mean[k] > -0.05 * v:
+            trail = mid[k]
+            break
+    return lead, trail
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--h", type=float, default=4.0)
+    ap.add_argument("--h", default="4", help="cell sizes [um], comma-separated")
+    ap.add_argument("--length-um", type=float, default=500.0,
+                    help="strip height [um]; the void count scales with it (same porosity)")
+    ap.add_argument("--cases", default="",
+                    help="only these porosity:speed pairs, e.g. 0.09:1000,0.5:2000 (porosity 0.09, 0.3, 0.5)")
     ap.add_argument("--out", default="/tmp/compaction_hugoniot")
     ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
     a = ap.parse_args()
-    print(f"Strip at h = {a.h:g} um; front and wall stress fitted over 0.5-0.95 of the run.\n")
-    print("| voids | porosity | v [m/s] | front [m/s] | RH front | error | wall stress [GPa] | RH P | error | energy |")
-    print("|---|---|---|---|---|---|---|---|---|---|")
-    for count in (14, 55, 105):
-        for v in (500.0, 1000.0, 2000.0):
-            out = os.path.join(a.out, f"n{count}-v{v:g}-h{a.h:g}")
-            sets = ["--set", f"grid.cell_size_um={a.h}", "--set", f"bodies.target.voids.count={count}",
-                    "--set", f"bodies.target.velocity_m_s=[0.0, {-v}]"]
-            case = os.path.join(ROOT, "cases", "verify", "porous_strip.toml")
-            # the run ends before the front could reach the free top of the 500 um strip: at
-            # 70 % of the strip at the compacted Hugoniot's speed (at most 200 ns)
-            chk = subprocess.run([a.driver, "check", case] + sets, capture_output=True, text=True).stdout
-            rh = [float(l.split("front ")[1].split(" m/s")[0]) for l in chk.splitlines() if "fully compacted" in l]
-            if not rh:
-                print(f"| {count} | | {v:g} | no fully compacted Hugoniot state (`check`) | | | | | | |", flush=True)
-                continue
-            t_end = min(200.0, 0.7 * 500e-6 / rh[0] * 1e9)
-            cmd = [a.driver, "run", case, "--quiet", "--overwrite", "--out", out, "--set", f"run.end_time_ns={t_end:.1f}"]
-            subprocess.run(cmd + sets, stdout=subprocess.DEVNULL)
-            try:
-                run = json.load(open(os.path.join(out, "run.json")))
-                c = run["bodies"][0]["compacted_hugoniot"]
-                fr = rows(os.path.join(out, "front.csv"))
-                t = np.array([float(r["time_ns"]) for r in fr])
-                y = np.array([float(r["front_y_um"]) for r in fr])
-                sel = (t >= 0.5 * t_end) & (t <= 0.95 * t_end)
-                front = float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3
-                wl = rows(os.path.join(out, "wall.csv"))
-                tw = np.array([float(r["time_ns"]) for r in wl])
-                sw = np.array([float(r["wall_stress_GPa"]) for r in wl])
-                wall = float(sw[(tw >= 0.5 * t_end) & (tw <= 0.95 * t_end)].mean())
-                en = rows(os.path.join(out, "energy.csv"))
-                e = float(en[-1]["residual_J_per_m"]) / float(en[0]["total_J_per_m"])
-                rf, rp = c["front_speed_wall_frame_m_s"], c["P_Pa"] * 1e-9
-                print(f"| {count} | {run['bodies'][0]['porosity']:.3f} | {v:g} | {front:.0f} | {rf:.0f} | "
-                      f"{100 * (front / rf - 1):+.1f} % | {wall:.2f} | {rp:.2f} | {100 * (wall / rp - 1):+.1f} % | {e:+.1e} |",
-                      flush=True)
-            except (OSError, KeyError, ValueError, IndexError) as e:
-                print(f"| {count} | | {v:g} | run failed: {e} | | | | | | |", flush=True)
+    L = a.length_um
+    counts = {0.09: 14, 0.3: 55, 0.5: 105}
+    want = [(float(c.split(":")[0]), float(c.split(":")[1])) for c in a.cases.split(",") if c]
+    print(f"Strip {L:g} um high; front and wall stress fitted over 0.5-0.95 of the run. sigma_RH(front): "
+          "rho00 (D + v) v from the measured front D (the stress its own momentum balance gives). "
+          "Wave edges: where the mean U_y of the last snapshot departs from -v by 5 % (lead) and 95 % "
+          "(trail); width = lead - trail.\n")
+    print("| h [um] | porosity | v [m/s] | front [m/s] | RH front | error | wall stress [GPa] | RH P | error | "
+          "rho00 (D+v) v | lead - RH [um] | width [um] | energy |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for h in [float(x) for x in a.h.split(",")]:
+        for phi, count0 in counts.items():
+            for v in (500.0, 1000.0, 2000.0):
+                if want and not any(abs(phi - p) < 1e-9 and v == w for p, w in want):
+                    continue
+                count = int(round(count0 * L / 500.0))
+                out = os.path.join(a.out, f"n{count}-v{v:g}-h{h:g}-L{L:g}")
+                sets = ["--set", f"grid.cell_size_um={h}", "--set", f"bodies.target.voids.count={count}",
+                        "--set", f"bodies.target.velocity_m_s=[0.0, {-v}]",
+                        "--set", f"bodies.target.y_range_um=[0.0, {L}]",
+                        "--set", f"grid.y_range_um=[0.0, {L + 20.0 + (-L - 20.0) % h}]"]
+                case = os.path.join(ROOT, "cases", "verify", "porous_strip.toml")
+                # the run ends before the front could reach the free top: at 70 % of the strip at
+                # the compacted Hugoniot's speed (at most 200 ns per 500 um)
+                chk = subprocess.run([a.driver, "check", case] + sets, capture_output=True, text=True)
+                rh = [float(l.split("front ")[1].split(" m/s")[0]) for l in chk.stdout.splitlines()
+                      if "fully compacted" in l]
+                if not rh:
+                    why = chk.stderr.strip() or "no fully compacted Hugoniot state (`check`)"
+                    print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | |", flush=True)
+                    continue
+                t_end = min(200.0 * L / 500.0, 0.7 * L * 1e-6 / rh[0] * 1e9)
+                cmd = [a.driver, "run", case, "--quiet", "--overwrite", "--out", out,
+                       "--set", f"run.end_time_ns={t_end:.1f}", "--set", f"run.snapshot_interval_ns={t_end:.1f}"]
+                subprocess.run(cmd + sets, stdout=subprocess.DEVNULL)
+                try:
+                    run = json.load(open(os.path.join(out, "run.json")))
+                    c = run["bodies"][0]["compacted_hugoniot"]
+                    fr = rows(os.path.join(out, "front.csv"))
+                    t = np.array([float(r["time_ns"]) for r in fr])
+                    y = np.array([float(r["front_y_um"]) for r in fr])
+                    sel = (t >= 0.5 * t_end) & (t <= 0.95 * t_end)
+                    front = float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3
+                    wl = rows(os.path.join(out, "wall.csv"))
+                    tw = np.array([float(r["time_ns"]) for r in wl])
+                    sw = np.array([float(r["wall_stress_GPa"]) for r in wl])
+                    wall = float(sw[(tw >= 0.5 * t_end) & (tw <= 0.95 * t_end)].mean())
+                    en = rows(os.path.join(out, "energy.csv"))
+                    e = float(en[-1]["residual_J_per_m"]) / float(en[0]["total_J_per_m"])
+                    rf, rp = c["front_speed_wall_frame_m_s"], c["P_Pa"] * 1e-9
+                    phi_run = run["bodies"][0]["porosity"]
+                    rho00 = c["rho_kg_m3"] * (c["Us_m_s"] - c["up_m_s"]) / c["Us_m_s"]
+                    mom = rho00 * (front + v) * v * 1e-9
+                    lead, trail = profile_edges(out, v, 2.0 * h)
+                    print(f"| {h:g} | {phi_run:.3f} | {v:g} | {front:.0f} | {rf:.0f} | {100 * (front / rf - 1):+.1f} % | "
+                          f"{wall:.2f} | {rp:.2f} | {100 * (wall / rp - 1):+.1f} % | {mom:.2f} | "
+                          f"{lead - rf * t_end * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} |", flush=True)
+                except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+                    print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | |", flush=True)
 
 
 if __name__ == "__main__":

@@ -1,7 +1,10 @@
 #include "engine/run.hpp"
 
 #include <omp.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <algorithm>
@@ -66,6 +69,29 @@ void clear_output_dir(const std::filesystem::path& out, bool overwrite) {
   for (const char* f : kOutputFiles) fs::remove(out / f);
   for (const char* d : kOutputDirs) fs::remove_all(out / d);
 }
+
+// One run at a time per output directory: an exclusive flock on DIR/.lock, held while the run
+// writes (released by the kernel when the process ends, however it ends). A second run or a
+// resume into the same directory is refused (exit 2) instead of mixing its rows into the first's.
+class DirLock {
+ public:
+  explicit DirLock(const std::filesystem::path& dir) {
+    const auto file = dir / ".lock";
+    fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw OutputError("cannot create " + file.string() + ": " + std::strerror(errno));
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      throw CaseError("output directory '" + dir.string() + "' is in use by another shockmpm run (it holds " +
+                      file.string() + "); wait for it, stop it, or choose another --out");
+    }
+  }
+  ~DirLock() { ::close(fd_); }
+  DirLock(const DirLock&) = delete;
+  DirLock& operator=(const DirLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
 
 // Peak resident set size of the process [bytes] (Linux reports KiB).
 long long peak_rss_bytes() {
@@ -335,6 +361,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   // a run owns its output directory: an earlier run's results there go (--overwrite), now
   // that this one is built and about to write its own
   std::filesystem::create_directories(out);
+  const DirLock lock(out);
   clear_output_dir(out, opt.overwrite && !resume);
   if (!resume) {
     std::ofstream c(out / "case_resolved.toml");

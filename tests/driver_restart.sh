@@ -3,8 +3,8 @@
 # moment (snapshots every 1 ns, so often mid-snapshot or mid-checkpoint) and resumed at another
 # thread count ends with every output file byte for byte that of the uninterrupted run: CSV rows
 # neither duplicated nor missing, the same snapshots, XDMF index and series.h5. A SIGTERM writes a
-# checkpoint; a damaged newest checkpoint is named and the one before it used; a completed run
-# and a directory without checkpoints are refused (exit 2).
+# checkpoint; a damaged newest checkpoint is named and the one before it used; a completed run,
+# a directory without checkpoints and a directory another run is writing are refused (exit 2).
 #   tests/driver_restart.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"
@@ -50,6 +50,11 @@ grep -Eq '"status" *: *"completed"' "$TMP/kill/run.json" || say "resumed run.jso
   2> "$TMP/term.err" &
 pid=$!
 wait_for "$TMP/term/checkpoint/ckpt_*.bin" || say "no checkpoint within 60 s"
+# a resume (or another run) into a directory a run is writing: refused, the run untouched
+"$EXE" resume "$TMP/term" --quiet 2> "$TMP/busy.err"; rc=$?
+[ "$rc" = 2 ] && grep -q "is in use by another shockmpm run" "$TMP/busy.err" || say "resume beside a running run: exit $rc, $(cat "$TMP/busy.err")"
+"$EXE" run "$CASE" --out "$TMP/term" --overwrite --quiet "${SET[@]}" 2> "$TMP/busy.err"; rc=$?
+[ "$rc" = 2 ] && grep -q "is in use by another shockmpm run" "$TMP/busy.err" || say "--overwrite beside a running run: exit $rc, $(cat "$TMP/busy.err")"
 sleep 0.3
 kill -TERM "$pid"
 wait "$pid"; rc=$?
