@@ -3,11 +3,12 @@
 
 Issue 14's strip (cases/verify/porous_strip.toml, voids of 10 um) with 14, 55 and 105 voids
 (porosity about 0.09, 0.3 and 0.5) driven onto the wall at 500, 1000 and 2000 m/s. Per run:
-the compaction front speed in the wall frame (front.csv, least squares over 0.5-0.95 of the run,
-which ends when a front at the Hugoniot speed would have crossed 70 % of the strip, at most
-200 ns) and the mean wall stress over the same window, against the fully compacted Rankine-Hugoniot
-front and pressure for the run's achieved porosity (run.json compacted_hugoniot: no strength,
-the material behind the front at rest and fully dense).
+the compaction front speed in the wall frame (front.csv, least squares over 0.3-0.95 of the run,
+which ends at 70 % of the time a front at the Hugoniot speed takes to meet the free top coming
+down at v), the mean -sigma_yy behind the front (snapshots of the second half) and the mean wall
+stress, against the fully compacted Rankine-Hugoniot front and pressure for the run's achieved
+porosity (run.json compacted_hugoniot: no strength, the material behind the front at rest and
+fully dense). The strip is --length-um high (the void count scales with it).
 
   /usr/bin/python3 bench/compaction_hugoniot.py [--h 4,2] [--length-um 500] [--cases 0.5:2000,...]
                    [--out DIR] [--driver build/shockmpm]
@@ -58,6 +59,28 @@ def profile_edges(out, v, dy):
     return lead, trail
 
 
+def stress_behind(out, t_front, y_front, t_end):
+    """Mean -sigma_yy [GPa] and U_y [m/s] of the target's points between 0.1 and 0.8 of the
+    front's height, over the snapshots of the second half of the run: the compacted state,
+    averaged over its reverberation in space and time."""
+    import glob
+    import h5py
+    s_all, u_all = [], []
+    for snap in sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5"))):
+        with h5py.File(snap, "r") as f:
+            t = f["particles"].attrs["time"] * 1e9
+            if t < 0.5 * t_end:
+                continue
+            y = f["particles/position"][:, 1] * 1e6
+            syy = f["particles/stress_yy"][:] * 1e-9
+            uy = f["particles/velocity"][:, 1]
+        yf = float(np.interp(t, t_front, y_front))
+        m = (y >= 0.1 * yf) & (y <= 0.8 * yf)
+        s_all.append(-syy[m].mean())
+        u_all.append(uy[m].mean())
+    return float(np.mean(s_all)), float(np.mean(u_all))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--h", default="4", help="cell sizes [um], comma-separated")
@@ -67,17 +90,20 @@ def main():
                     help="only these porosity:speed pairs, e.g. 0.09:1000,0.5:2000 (porosity 0.09, 0.3, 0.5)")
     ap.add_argument("--out", default="/tmp/compaction_hugoniot")
     ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
+    ap.add_argument("--no-run", action="store_true", help="analyse the runs already in --out")
     a = ap.parse_args()
     L = a.length_um
     counts = {0.09: 14, 0.3: 55, 0.5: 105}
     want = [(float(c.split(":")[0]), float(c.split(":")[1])) for c in a.cases.split(",") if c]
-    print(f"Strip {L:g} um high; front and wall stress fitted over 0.5-0.95 of the run. sigma_RH(front): "
-          "rho00 (D + v) v from the measured front D (the stress its own momentum balance gives). "
-          "Wave edges: where the mean U_y of the last snapshot departs from -v by 5 % (lead) and 95 % "
-          "(trail); width = lead - trail.\n")
-    print("| h [um] | porosity | v [m/s] | front [m/s] | RH front | error | wall stress [GPa] | RH P | error | "
-          "rho00 (D+v) v | lead - RH [um] | width [um] | energy |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print(f"Strip {L:g} um high. Front: least squares over 0.3-0.95 of the run. Wall: mean wall stress "
+          "over the same window. Behind: mean -sigma_yy of the points between 0.1 and 0.8 of the "
+          "front's height over the snapshots of the second half of the run (the compacted state, "
+          "averaged over its reverberation), and their mean U_y. Against the fully compacted Rankine-Hugoniot front and P (no strength). Lead: the "
+          "leading edge of the wave (U_y departs from -v by 5 %) minus the RH front position; width: "
+          "from 5 % to 95 %.\n")
+    print("| h [um] | porosity | v [m/s] | front [m/s] | RH front | error | behind [GPa] | RH P | error | "
+          "U_y behind [m/s] | wall [GPa] | error | lead - RH [um] | width [um] | energy |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for h in [float(x) for x in a.h.split(",")]:
         for phi, count0 in counts.items():
             for v in (500.0, 1000.0, 2000.0):
@@ -90,43 +116,44 @@ def main():
                         "--set", f"bodies.target.y_range_um=[0.0, {L}]",
                         "--set", f"grid.y_range_um=[0.0, {L + 20.0 + (-L - 20.0) % h}]"]
                 case = os.path.join(ROOT, "cases", "verify", "porous_strip.toml")
-                # the run ends before the front could reach the free top: at 70 % of the strip at
-                # the compacted Hugoniot's speed (at most 200 ns per 500 um)
+                # the run ends before the front meets the free top (which comes down at v): at 70 %
+                # of the time a front at the compacted Hugoniot's speed takes to meet it
                 chk = subprocess.run([a.driver, "check", case] + sets, capture_output=True, text=True)
                 rh = [float(l.split("front ")[1].split(" m/s")[0]) for l in chk.stdout.splitlines()
                       if "fully compacted" in l]
                 if not rh:
                     why = chk.stderr.strip() or "no fully compacted Hugoniot state (`check`)"
-                    print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | |", flush=True)
+                    print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | | | |", flush=True)
                     continue
-                t_end = min(200.0 * L / 500.0, 0.7 * L * 1e-6 / rh[0] * 1e9)
+                t_end = 0.7 * L * 1e-6 / (rh[0] + v) * 1e9
                 cmd = [a.driver, "run", case, "--quiet", "--overwrite", "--out", out,
-                       "--set", f"run.end_time_ns={t_end:.1f}", "--set", f"run.snapshot_interval_ns={t_end:.1f}"]
-                subprocess.run(cmd + sets, stdout=subprocess.DEVNULL)
+                       "--set", f"run.end_time_ns={t_end:.1f}", "--set", f"run.snapshot_interval_ns={t_end / 8:.3f}"]
+                if not a.no_run:
+                    subprocess.run(cmd + sets, stdout=subprocess.DEVNULL)
                 try:
                     run = json.load(open(os.path.join(out, "run.json")))
                     c = run["bodies"][0]["compacted_hugoniot"]
                     fr = rows(os.path.join(out, "front.csv"))
                     t = np.array([float(r["time_ns"]) for r in fr])
                     y = np.array([float(r["front_y_um"]) for r in fr])
-                    sel = (t >= 0.5 * t_end) & (t <= 0.95 * t_end)
+                    sel = (t >= 0.3 * t_end) & (t <= 0.95 * t_end)
                     front = float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3
                     wl = rows(os.path.join(out, "wall.csv"))
                     tw = np.array([float(r["time_ns"]) for r in wl])
                     sw = np.array([float(r["wall_stress_GPa"]) for r in wl])
-                    wall = float(sw[(tw >= 0.5 * t_end) & (tw <= 0.95 * t_end)].mean())
+                    wall = float(sw[(tw >= 0.3 * t_end) & (tw <= 0.95 * t_end)].mean())
                     en = rows(os.path.join(out, "energy.csv"))
                     e = float(en[-1]["residual_J_per_m"]) / float(en[0]["total_J_per_m"])
                     rf, rp = c["front_speed_wall_frame_m_s"], c["P_Pa"] * 1e-9
                     phi_run = run["bodies"][0]["porosity"]
-                    rho00 = c["rho_kg_m3"] * (c["Us_m_s"] - c["up_m_s"]) / c["Us_m_s"]
-                    mom = rho00 * (front + v) * v * 1e-9
                     lead, trail = profile_edges(out, v, 2.0 * h)
+                    behind, uy = stress_behind(out, t, y, t_end)
                     print(f"| {h:g} | {phi_run:.3f} | {v:g} | {front:.0f} | {rf:.0f} | {100 * (front / rf - 1):+.1f} % | "
-                          f"{wall:.2f} | {rp:.2f} | {100 * (wall / rp - 1):+.1f} % | {mom:.2f} | "
-                          f"{lead - rf * t_end * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} |", flush=True)
+                          f"{behind:.2f} | {rp:.2f} | {100 * (behind / rp - 1):+.1f} % | {uy:+.0f} | {wall:.2f} | "
+                          f"{100 * (wall / rp - 1):+.1f} % | {lead - rf * t[-1] * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} |",
+                          flush=True)
                 except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
-                    print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | |", flush=True)
+                    print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | | | |", flush=True)
 
 
 if __name__ == "__main__":
