@@ -91,6 +91,9 @@ def main():
     ap.add_argument("--out", default="/tmp/compaction_hugoniot")
     ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
     ap.add_argument("--no-run", action="store_true", help="analyse the runs already in --out")
+    ap.add_argument("--check", type=float, default=0.0,
+                    help="exit 1 unless every row's front, stress behind and wall stress are within this "
+                         "many per cent of the Hugoniot's (and every run has a reference and completes)")
     a = ap.parse_args()
     L = a.length_um
     counts = {0.09: 14, 0.3: 55, 0.5: 105}
@@ -104,6 +107,7 @@ def main():
     print("| h [um] | porosity | v [m/s] | front [m/s] | RH front | error | behind [GPa] | RH P | error | "
           "U_y behind [m/s] | wall [GPa] | error | lead - RH [um] | width [um] | energy |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    failed = 0
     for h in [float(x) for x in a.h.split(",")]:
         for phi, count0 in counts.items():
             for v in (500.0, 1000.0, 2000.0):
@@ -124,6 +128,7 @@ def main():
                 if not rh:
                     why = chk.stderr.strip() or "no fully compacted Hugoniot state (`check`)"
                     print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | | | |", flush=True)
+                    failed += 1
                     continue
                 t_end = 0.7 * L * 1e-6 / (rh[0] + v) * 1e9
                 cmd = [a.driver, "run", case, "--quiet", "--overwrite", "--out", out,
@@ -152,9 +157,16 @@ def main():
                           f"{behind:.2f} | {rp:.2f} | {100 * (behind / rp - 1):+.1f} % | {uy:+.0f} | {wall:.2f} | "
                           f"{100 * (wall / rp - 1):+.1f} % | {lead - rf * t[-1] * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} |",
                           flush=True)
+                    errs = [100 * abs(front / rf - 1), 100 * abs(behind / rp - 1), 100 * abs(wall / rp - 1)]
+                    if a.check > 0 and (max(errs) > a.check or run["status"] != "completed"):
+                        failed += 1
                 except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
                     print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | | | |", flush=True)
+                    failed += 1
+    if a.check > 0:
+        print(f"\ncheck within {a.check:g} %: {'FAIL' if failed else 'PASS'} ({failed} rows failed)")
+    return 1 if (a.check > 0 and failed) else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
