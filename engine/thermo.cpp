@@ -126,7 +126,9 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
   const int n = 4000;
   auto try_bracket = [&](double a, double b) {
     if (!(f(a) < 0.0 && f(b) > 0.0) && !(f(a) > 0.0 && f(b) < 0.0)) return false;
-    if (!(pressure(a) > 0.0 && pressure(b) > 0.0)) return false;
+    // on the branch P >= 0 (P = 0 exactly at rho0, where the scans start: a root just off rho0,
+    // e.g. porosity 0.495 at 1000 m/s, lies in a bracket that ends there)
+    if (!(pressure(a) >= 0.0 && pressure(b) >= 0.0)) return false;
     for (int it = 0; it < 200; ++it) {
       const double mid = 0.5 * (a + b);
       ((f(mid) < 0.0) == (f(a) < 0.0) ? a : b) = mid;
