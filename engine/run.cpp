@@ -496,11 +496,12 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   const double steps_before = resume ? resume->number("run/particle_steps") : 0.0;
   if (!opt.quiet) {
     const double dt0 = sim.stable_dt();
+    // a resumed run: the steps still to go, at the dt of the step it resumes at
+    const double left = scene.run.end_time - sim.time();
     std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
-                "(dt %.3g ns at t = 0), %d threads, results in %s\n",
+                "(dt %.3g ns at t = %.6g ns), %d threads, results in %s\n",
                 scene.name.c_str(), sim.particles().size(), scene.geom.nx, scene.geom.ny, scene.geom.h * 1e6,
-                scene.run.end_time * 1e9, std::ceil(scene.run.end_time / dt0), dt0 * 1e9, threads,
-                out.string().c_str());
+                left * 1e9, std::ceil(left / dt0), dt0 * 1e9, sim.time() * 1e9, threads, out.string().c_str());
     std::fflush(stdout);
   }
   g_stop_signal = 0;
