@@ -493,7 +493,6 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   s.status = "running";
   write_run_json(out / "run.json", scene, sim, s, threads, prov);
   const double t_resumed = sim.time();
-  const double steps_before = resume ? resume->number("run/particle_steps") : 0.0;
   if (!opt.quiet) {
     const double dt0 = sim.stable_dt();
     // a resumed run: the steps still to go, at the dt of the step it resumes at
@@ -513,7 +512,8 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   double next_snap = 0.0, next_energy = 0.0;
   const double wall0 = omp_get_wtime();
   double last_progress = wall0, last_checkpoint = wall0;
-  double particle_steps = 0.0, wall_before = 0.0;  // of the runs before a resume
+  // particle-steps and wall seconds: the totals, and those of the runs before a resume
+  double particle_steps = 0.0, steps_before = 0.0, wall_before = 0.0;
   const double n = static_cast<double>(sim.particles().size());
   const std::pair<const char*, std::ofstream*> csvs[] = {
       {"energy.csv", &energy}, {"series.csv", &series}, {"front.csv", &front}, {"wall.csv", &wall}, {"voids.csv", &voids}};
@@ -549,7 +549,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     if (resume) {
       next_snap = resume->number("run/next_snap");
       next_energy = resume->number("run/next_energy");
-      particle_steps = resume->number("run/particle_steps");
+      particle_steps = steps_before = resume->number("run/particle_steps");
       wall_before = resume->number("run/wall_seconds");
       s.diagnostics_seconds = resume->number("run/diagnostics_seconds");
       s.output_seconds = resume->number("run/output_seconds");
