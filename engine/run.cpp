@@ -270,6 +270,9 @@ std::string describe_scene(const Scene& sc) {
       if (c.in_range)
         o << "  " << b.name << " fully compacted from porosity " << b.porosity << ": front " << c.Us - c.up
           << " m/s in the wall frame, P " << c.P * 1e-9 << " GPa, rho " << c.rho << " kg/m^3, T " << c.T << " K\n";
+      else
+        o << "  " << b.name << " fully compacted from porosity " << b.porosity << ": no state found (the EOS has no "
+          << "compacted Hugoniot state with P > 0 between rho00 and 4 rho0 here); run.json says not_found\n";
     }
   }
   o << "memory          " << std::fixed << std::setprecision(1) << sim.bytes() / 1048576.0 << " MiB resident ("

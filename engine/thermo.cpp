@@ -145,6 +145,13 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
     const double b = m.rho0 - (m.rho0 - rho00) * k / n, a = m.rho0 - (m.rho0 - rho00) * (k + 1) / n;
     found = try_bracket(a, b);
   }
+  // porosity within about 1e-4 of the degenerate one (0.5 for gamma0 = 2: the pressure's pole
+  // V00 - V = 2 / gamma_rho then sits next to rho0, and the state between the pole and rho0 is
+  // narrower than the scans' steps): brackets shrinking geometrically towards rho0 on each side
+  for (int k = 0; k < 240 && !found; ++k) {
+    const double d0 = std::pow(10.0, -3.0 - k / 20.0), d1 = std::pow(10.0, -3.0 - (k + 1) / 20.0);
+    found = try_bracket(m.rho0 * (1.0 + d1), m.rho0 * (1.0 + d0)) || try_bracket(m.rho0 * (1.0 - d0), m.rho0 * (1.0 - d1));
+  }
   if (!found) return h;
   return jump_state(m, rho00, root, pressure(root));
 }
