@@ -10,13 +10,17 @@ stress, against the fully compacted Rankine-Hugoniot front and pressure for the 
 porosity (run.json compacted_hugoniot: no strength, the material behind the front at rest and
 fully dense). The strip is --length-um high (the void count scales with it).
 
-  /usr/bin/python3 bench/compaction_hugoniot.py [--h 4,2] [--length-um 500] [--cases 0.5:2000,...]
-                   [--out DIR] [--driver build/shockmpm]
+  /usr/bin/python3 bench/compaction_hugoniot.py [--h 4,2] [--length-um 500] [--width-um 96]
+                   [--cases 0.5:2000,...] [--set KEY=VALUE ...] [--out DIR] [--driver build/shockmpm]
+
+--width-um widens the strip (periodic sides; the void count scales with its area), --set passes
+case overrides to every run (e.g. materials.al.yield_stress_MPa=0 for a material without strength).
 
 Prints a markdown table (docs/accuracy.md, "Compaction against the porous Hugoniot").
 """
 import argparse
 import csv
+import hashlib
 import json
 import os
 import subprocess
@@ -81,6 +85,48 @@ def stress_behind(out, t_front, y_front, t_end):
     return float(np.mean(s_all)), float(np.mean(u_all))
 
 
+def swept_porosity(out, t, y, v, t1, t2, spacing):
+    """Porosity of the material the front swept between t1 and t2 [ns]: the band of initial
+    heights y0 = y_front(t) + v t (material ahead of the front falls at v), counted on the
+    t = 0 snapshot's lattice (points of spacing `spacing` um; the voids' points are absent).
+    A random sample's porosity varies along y (Poisson: +-0.03 in 200 um bands of the 384 um
+    strip at 0.5), and near porosity 0.5 the compacted front moves 4 % per 0.01 of porosity."""
+    import glob
+    import h5py
+    snaps = sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5")))
+    with h5py.File(snaps[0], "r") as f:
+        if f["particles"].attrs["time"] > 0.0:
+            return float("nan")
+        p = f["particles/position"][:] * 1e6
+    lo = float(np.interp(t1, t, y)) + v * t1 * 1e-3
+    hi = float(np.interp(t2, t, y)) + v * t2 * 1e-3
+    xs = np.unique(np.round(p[:, 0], 6))
+    width = xs.max() - xs.min() + spacing
+    n = np.count_nonzero((p[:, 1] >= lo) & (p[:, 1] < hi))
+    return 1.0 - n * spacing * spacing / (width * (hi - lo))
+
+
+def hugoniot_at(driver, case, sets, porosity):
+    """The compacted Hugoniot (front [m/s], P [GPa]) at another porosity: `check` of the case with
+    voids.porosity instead of count (the generator stops within one void of it)."""
+    import tempfile
+    text = open(case).read()
+    text = "\n".join(f"porosity = {porosity:.5f}" if l.strip().startswith("count =") else l for l in text.splitlines())
+    with tempfile.NamedTemporaryFile("w", prefix=".compaction_hugoniot_", suffix=".toml", dir=os.path.dirname(case), delete=False) as f:
+        f.write(text)
+        tmp = f.name
+    try:
+        keep = [x for i, x in enumerate(sets) if not (x.startswith("bodies.target.voids.count") or
+                                                      (x == "--set" and i + 1 < len(sets) and sets[i + 1].startswith("bodies.target.voids.count")))]
+        chk = subprocess.run([driver, "check", tmp] + keep, capture_output=True, text=True)
+    finally:
+        os.unlink(tmp)
+    for l in chk.stdout.splitlines():
+        if "fully compacted" in l and "front " in l:
+            return float(l.split("front ")[1].split(" m/s")[0]), float(l.split(" P ")[1].split(" GPa")[0])
+    return float("nan"), float("nan")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--h", default="4", help="cell sizes [um], comma-separated")
@@ -88,6 +134,10 @@ def main():
                     help="strip height [um]; the void count scales with it (same porosity)")
     ap.add_argument("--cases", default="",
                     help="only these porosity:speed pairs, e.g. 0.09:1000,0.5:2000 (porosity 0.09, 0.3, 0.5)")
+    ap.add_argument("--width-um", type=float, default=96.0,
+                    help="strip width [um]; the void count scales with it (same porosity)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a case override for every run (repeatable)")
     ap.add_argument("--out", default="/tmp/compaction_hugoniot")
     ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
     ap.add_argument("--no-run", action="store_true", help="analyse the runs already in --out")
@@ -96,29 +146,40 @@ def main():
                          "many per cent of the Hugoniot's (and every run has a reference and completes)")
     a = ap.parse_args()
     L = a.length_um
+    W = a.width_um
+    if not W > 0.0 or abs(W / 4.0 - round(W / 4.0)) > 1e-9:
+        sys.exit(f"error: --width-um {W:g}: must be a positive multiple of 4 um (the cell sizes divide it)")
+    extra = []
+    for kv in a.set:
+        extra += ["--set", kv]
+    tag = "" if not a.set else "-s" + hashlib.sha1("\n".join(a.set).encode()).hexdigest()[:8]
     counts = {0.09: 14, 0.3: 55, 0.5: 105}
     want = [(float(c.split(":")[0]), float(c.split(":")[1])) for c in a.cases.split(",") if c]
-    print(f"Strip {L:g} um high. Front: least squares over 0.3-0.95 of the run. Wall: mean wall stress "
+    print(f"Strip {W:g} um wide, {L:g} um high{' (' + ', '.join(a.set) + ')' if a.set else ''}. Front: least squares over 0.3-0.95 of the run. Wall: mean wall stress "
           "over the same window. Behind: mean -sigma_yy of the points between 0.1 and 0.8 of the "
           "front's height over the snapshots of the second half of the run (the compacted state, "
           "averaged over its reverberation), and their mean U_y. Against the fully compacted Rankine-Hugoniot front and P (no strength). Lead: the "
           "leading edge of the wave (U_y departs from -v by 5 %) minus the RH front position; width: "
           "from 5 % to 95 %.\n")
     print("| h [um] | porosity | v [m/s] | front [m/s] | RH front | error | behind [GPa] | RH P | error | "
-          "U_y behind [m/s] | wall [GPa] | error | lead - RH [um] | width [um] | energy |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "U_y behind [m/s] | wall [GPa] | error | lead - RH [um] | width [um] | energy | swept porosity | "
+          "RH front there | error | RH P there | behind error |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     failed = 0
     for h in [float(x) for x in a.h.split(",")]:
         for phi, count0 in counts.items():
             for v in (500.0, 1000.0, 2000.0):
                 if want and not any(abs(phi - p) < 1e-9 and v == w for p, w in want):
                     continue
-                count = int(round(count0 * L / 500.0))
-                out = os.path.join(a.out, f"n{count}-v{v:g}-h{h:g}-L{L:g}")
+                count = int(round(count0 * L / 500.0 * W / 96.0))
+                out = os.path.join(a.out, f"n{count}-v{v:g}-h{h:g}-L{L:g}" + (f"-W{W:g}" if W != 96.0 else "") + tag)
                 sets = ["--set", f"grid.cell_size_um={h}", "--set", f"bodies.target.voids.count={count}",
                         "--set", f"bodies.target.velocity_m_s=[0.0, {-v}]",
                         "--set", f"bodies.target.y_range_um=[0.0, {L}]",
                         "--set", f"grid.y_range_um=[0.0, {L + 20.0 + (-L - 20.0) % h}]"]
+                if W != 96.0:
+                    sets += ["--set", f"grid.x_range_um=[0.0, {W:g}]", "--set", f"bodies.target.x_range_um=[0.0, {W:g}]"]
+                sets += extra
                 case = os.path.join(ROOT, "cases", "verify", "porous_strip.toml")
                 # the run ends before the front meets the free top (which comes down at v): at 70 %
                 # of the time a front at the compacted Hugoniot's speed takes to meet it
@@ -127,7 +188,7 @@ def main():
                       if "fully compacted" in l]
                 if not rh:
                     why = chk.stderr.strip() or "no fully compacted Hugoniot state (`check`)"
-                    print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | | | |", flush=True)
+                    print(f"| {h:g} | {phi} | {v:g} | {why} | | | | | | | | | | | | | | | | |", flush=True)
                     failed += 1
                     continue
                 t_end = 0.7 * L * 1e-6 / (rh[0] + v) * 1e9
@@ -153,15 +214,19 @@ def main():
                     phi_run = run["bodies"][0]["porosity"]
                     lead, trail = profile_edges(out, v, 2.0 * h)
                     behind, uy = stress_behind(out, t, y, t_end)
+                    ts = t[sel]
+                    phi_s = swept_porosity(out, t, y, v, ts[0], ts[-1], 0.5 * h)
+                    rf_s, rp_s = hugoniot_at(a.driver, case, sets, phi_s) if np.isfinite(phi_s) else (float("nan"),) * 2
                     print(f"| {h:g} | {phi_run:.3f} | {v:g} | {front:.0f} | {rf:.0f} | {100 * (front / rf - 1):+.1f} % | "
                           f"{behind:.2f} | {rp:.2f} | {100 * (behind / rp - 1):+.1f} % | {uy:+.0f} | {wall:.2f} | "
-                          f"{100 * (wall / rp - 1):+.1f} % | {lead - rf * t[-1] * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} |",
+                          f"{100 * (wall / rp - 1):+.1f} % | {lead - rf * t[-1] * 1e-3:+.0f} | {lead - trail:.0f} | {e:+.1e} | "
+                          f"{phi_s:.3f} | {rf_s:.0f} | {100 * (front / rf_s - 1):+.1f} % | {rp_s:.2f} | {100 * (behind / rp_s - 1):+.1f} % |",
                           flush=True)
                     errs = [100 * abs(front / rf - 1), 100 * abs(behind / rp - 1), 100 * abs(wall / rp - 1)]
                     if a.check > 0 and (max(errs) > a.check or run["status"] != "completed"):
                         failed += 1
                 except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
-                    print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | | | |", flush=True)
+                    print(f"| {h:g} | {phi} | {v:g} | run failed: {e} | | | | | | | | | | | | | | | | |", flush=True)
                     failed += 1
     if a.check > 0:
         print(f"\ncheck within {a.check:g} %: {'FAIL' if failed else 'PASS'} ({failed} rows failed)")
