@@ -108,10 +108,12 @@ def swept_porosity(out, t, y, v, t1, t2, spacing):
 
 def hugoniot_at(driver, case, sets, porosity):
     """The compacted Hugoniot (front [m/s], P [GPa]) at another porosity: `check` of the case with
-    voids.porosity instead of count (the generator stops within one void of it)."""
+    voids.porosity instead of its count or porosity line (the generator stops within one void of
+    it)."""
     import tempfile
     text = open(case).read()
-    text = "\n".join(f"porosity = {porosity:.5f}" if l.strip().startswith("count =") else l for l in text.splitlines())
+    text = "\n".join(f"porosity = {porosity:.5f}" if l.strip().startswith(("count =", "porosity =")) else l
+                     for l in text.splitlines())
     with tempfile.NamedTemporaryFile("w", prefix=".compaction_hugoniot_", suffix=".toml", dir=os.path.dirname(case), delete=False) as f:
         f.write(text)
         tmp = f.name
