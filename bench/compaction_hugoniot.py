@@ -118,8 +118,8 @@ def hugoniot_at(driver, case, sets, porosity):
         f.write(text)
         tmp = f.name
     try:
-        keep = [x for i, x in enumerate(sets) if not (x.startswith("bodies.target.voids.count") or
-                                                      (x == "--set" and i + 1 < len(sets) and sets[i + 1].startswith("bodies.target.voids.count")))]
+        keep = [x for flag, kv in zip(sets[0::2], sets[1::2])  # ("--set", KEY=VALUE) pairs
+                if not kv.startswith("bodies.target.voids.count") for x in (flag, kv)]
         chk = subprocess.run([driver, "check", tmp] + keep, capture_output=True, text=True)
     finally:
         os.unlink(tmp)

@@ -21,7 +21,6 @@ Writes a markdown table on stdout. Figures in docs/verification.md ("Porous stri
 """
 import argparse
 import csv
-import glob
 import math
 import os
 import sys
@@ -29,21 +28,18 @@ import sys
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+import figures  # noqa: E402  (the one reader of particles.xdmf)
+
 
 def snapshot_at(run, t_ns):
-    """The snapshot nearest to t_ns, by the times particles.xdmf gives them (ns)."""
-    import re
-    with open(os.path.join(run, "fields", "particles.xdmf")) as f:
-        text = f.read()
-    snaps = []
-    for block in text.split('<Time Value="')[1:]:
-        t = float(block.split('"', 1)[0])  # seconds
-        m = re.search(r"(snap_\d+\.h5)", block)
-        if m:
-            snaps.append((os.path.join(run, "fields", m.group(1)), t * 1e9))
-    if not snaps:
-        sys.exit(f"error: no snapshot listed in {run}/fields/particles.xdmf")
-    return min(snaps, key=lambda s: abs(s[1] - t_ns))
+    """(path, time [ns]) of the snapshot nearest to t_ns: scripts/figures.py's reading of
+    fields/particles.xdmf."""
+    try:
+        t, path = figures.Run(run).nearest_snapshot(t_ns)
+    except figures.Skip as e:
+        sys.exit(f"error: {run}: {e}")
+    return path, t
 
 
 def series_row(run, t_ns, region):

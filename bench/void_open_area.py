@@ -20,7 +20,6 @@ Writes a markdown table on stdout (docs/verification.md, "Hard cases").
 """
 import argparse
 import os
-import re
 import subprocess
 import sys
 
@@ -28,20 +27,14 @@ import h5py
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import figures  # noqa: E402  (the one reader of particles.xdmf)
 CASE = os.path.join(ROOT, "cases", "verify", "void_collapse.toml")
 
 
 def snapshots(run):
-    """(time [ns], path) of every snapshot listed in particles.xdmf."""
-    with open(os.path.join(run, "fields", "particles.xdmf")) as f:
-        text = f.read()
-    out = []
-    for block in text.split('<Time Value="')[1:]:
-        t = float(block.split('"', 1)[0]) * 1e9
-        m = re.search(r"(snap_\d+\.h5)", block)
-        if m:
-            out.append((t, os.path.join(run, "fields", m.group(1))))
-    return out
+    """(time [ns], path) of every snapshot listed in particles.xdmf (scripts/figures.py reads it)."""
+    return figures.Run(run).snapshots()
 
 
 def open_area(run, times, cut0, v, width):
