@@ -68,6 +68,17 @@ Moments moments(const std::vector<double>& v) {
   return m;
 }
 
+// The volume of solid a point holds [m^2]: V_p, except for a fractured point (the constitutive
+// update's zero pressure and zero deviator, kernels/constitutive.hpp), which holds at most
+// m / rho0: its expansion past solid density is opened crack, i.e. void. Debris flying alone
+// keeps its APIC affine velocity gradient, so its V grows without bound (rho down to 1e-4
+// kg/m^3 was seen in the study's baseline at h = 2 um), and counted as solid it made a band's
+// open porosity -40 instead of +0.02. An unstressed point at rho0 holds V either way.
+static double solid_volume(const Particles& P, std::size_t i, double rho0) {
+  const bool fractured = P.p[i] == 0.0 && P.sxx[i] == 0.0 && P.syy[i] == 0.0 && P.sxy[i] == 0.0;
+  return fractured && rho0 > 0.0 ? std::min(P.V[i], P.m[i] / rho0) : P.V[i];
+}
+
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
                                       const std::vector<int>& body_material, bool gradient_current) {
@@ -89,7 +100,7 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       out[r].S2 += gm.S2;
       out[r].R += gm.R;
       out[r].D += gm.D;
-      out[r].open += P.V[i];
+      out[r].open += solid_volume(P, i, materials[k].rho0);
     }
   }
   for (std::size_t r = 0; r < nr; ++r) {

@@ -76,8 +76,9 @@ struct RegionStats {
   // squares grow as 1/h (the jump over a width of a few cells), the means of the magnitudes do
   // not (the jump itself): docs/verification.md, porous strip.
   double R = 0, D = 0;
-  // 1 - sum V_p / (width (y1 - y0)): the band's area the points' volumes leave open (NaN
-  // without a width); negative where points overlap
+  // 1 - sum V_solid / (width (y1 - y0)): the band's area the points' solid volumes leave open
+  // (NaN without a width); V_solid = V_p, at most m_p / rho0 for a fractured point (its
+  // expansion is crack, diagnostics.cpp); negative where points overlap
   double open = 0;
 };
 // gradient_current: the particles' L belongs to their current state (Simulation::gradient_current);

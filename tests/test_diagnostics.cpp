@@ -81,6 +81,29 @@ TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
   CHECK(stale[1].P.mean == s[1].P.mean);
 }
 
+TEST_CASE("open porosity: a fractured point holds no more solid than m / rho0", "[diagnostics]") {
+  // a 2 x 5 um band (area 1e-11 m^2) with three points of m / rho0 = 1e-12 m^2 each
+  Particles P;
+  P.resize(3);
+  P.y = {1e-6, 2e-6, 3e-6};
+  P.body = {0, 0, 0};
+  for (std::size_t i = 0; i < 3; ++i) P.m[i] = 2.7e-9;
+  P.V = {0.9e-12, 1e-6, 1.01e-12};  // compressed; fractured debris blown up; in tension
+  P.p = {1e9, 0.0, -1e8};            // the fractured point: zero pressure, zero deviator
+  P.sxx = {1e8, 0.0, 0.0};
+  Material m;
+  m.rho0 = 2700;
+  m.E = 69e9;
+  m.nu = 0.33;
+  const std::vector<Thermo> th{Thermo(m)};
+  const std::vector<Region> regions{{"band", 0.0, 5e-6, 0, 2e-6}};
+  const auto s = region_stats(P, regions, th, {m}, {0});
+  // solid 0.9 + 1 (the debris capped at m / rho0) + 1.01 (intact tension counts its V) = 2.91e-12
+  CHECK(s[0].open == Approx(1.0 - 2.91e-12 / 1e-11));
+  // the debris still counts its own density in the mean
+  CHECK(s[0].rho.mean == Approx((3000.0 + 2.7e-3 + 2700.0 / 1.01) / 3.0));
+}
+
 TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
   // a body moving at -1000 m/s, stopped below y = 412.5 um (rows of 5 um): the half-jump level is
   // crossed between the last stopped row centre and the first moving one
