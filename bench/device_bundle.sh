@@ -3,11 +3,12 @@
 # machine that has none of the build's packages (the lent 16-core machine): two builds, -march=x86-64-v4 (AVX-512) and -march=x86-64-v3 (AVX2), and every shared
 # library they load, the loader included, into BUNDLE (default .devbundle, git-ignored).
 # bench/wide_node_device.sh runs it there with the build that the processor supports.
+# LEVELS="v4" rebuilds only that one (the other stays as it was).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUNDLE="${1:-$ROOT/.devbundle}"
 mkdir -p "$BUNDLE/lib"
-for level in v4 v3; do
+for level in ${LEVELS:-v4 v3}; do
   B="$ROOT/build-$level"
   cmake -S "$ROOT" -B "$B" -DCMAKE_BUILD_TYPE=Release -DSHOCKMPM_NATIVE=OFF -DSHOCKMPM_BENCH=ON \
     -DCMAKE_CXX_FLAGS="-march=x86-64-$level" > /dev/null

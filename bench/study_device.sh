@@ -8,6 +8,8 @@
 # with its own thread count (their sum at most the 16 cores), e.g.
 #   bash bench/study_device.sh 540 baseline_p050_v1000:3 velocity_p050_v500:2
 #   bash bench/study_device.sh [DEADLINE] [NAME:THREADS ...]
+# SETS="grid.cell_size_um=2.0 run.end_time_ns=1200.0" passes each word as a --set override to
+# every case (the study at another resolution; run.json's case_resolved shows what ran).
 set -uo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 source "$ROOT/bench/device_env.sh" shockmpm
@@ -25,8 +27,10 @@ cd "$ROOT"
 for r in "${runs[@]}"; do
   name="${r%%:*}" threads="${r##*:}"
   [ -f "cases/paper/$name.toml" ] || { echo "no case cases/paper/$name.toml" >&2; exit 2; }
+  sets=()
+  for kv in ${SETS:-}; do sets+=(--set "$kv"); done
   (timeout -s TERM "$deadline" /tmp/shockmpm run "cases/paper/$name.toml" --quiet --threads "$threads" \
-     --set run.snapshot_interval_ns=0 --out "/tmp/paper/$name" > "/tmp/paper-$name.log" 2>&1; echo "$name exit $?") &
+     --set run.snapshot_interval_ns=0 "${sets[@]}" --out "/tmp/paper/$name" > "/tmp/paper-$name.log" 2>&1; echo "$name exit $?") &
 done
 wait
 for r in "${runs[@]}"; do
