@@ -214,7 +214,10 @@ def porous_values(out):
 
 
 def richardson(hs, vals):
-    """Limit and observed order from the three finest (h halving); else the finest value."""
+    """Limit and observed order from the three finest (h halving); else the finest value. An
+    observed order outside 0.5-4 is not asymptotic (band III's mean P at one time swings by
+    0.3-0.5 GPa and gives 0.3, which would extrapolate 15 % past the finest run): the finest
+    value then stands in, and the order is reported as nan."""
     order = sorted(range(len(hs)), key=lambda i: -hs[i])
     hs = [hs[i] for i in order]
     vals = [vals[i] for i in order]
@@ -223,7 +226,8 @@ def richardson(hs, vals):
         d1, d2 = f1 - f2, f2 - f3
         if d1 != 0 and d2 != 0 and d1 / d2 > 1:
             p = math.log2(d1 / d2)
-            return f3 - d2 / (2 ** p - 1), p
+            if 0.5 <= p <= 4.0:
+                return f3 - d2 / (2 ** p - 1), p
     return vals[-1], float("nan")
 
 
@@ -346,7 +350,10 @@ def main():
     for r in (r for r in rows if r["scene"] == "dense"):
         # the check covers the default transfer and scheme (APIC, USL: the study's); FLIP and
         # MUSL rows are reported, not bounded (FLIP's shock speed is 2.5 % fast at h = 5 um)
-        if r["settings"].get("solver.scheme", "usl") != "usl" or r["settings"].get("solver.transfer", "apic") != "apic":
+        # nor the linear hat, whose cell-crossing errors grow as h shrinks (full matrix: P -34 % at
+        # h = 1.25 um, 1000 m/s; docs/accuracy.md)
+        if r["settings"].get("solver.scheme", "usl") != "usl" or r["settings"].get("solver.transfer", "apic") != "apic" \
+                or r["settings"].get("solver.shape") == "linear":
             continue
         for q, b in BOUNDS.items():
             if abs(r["errors"][q]) > b:

@@ -25,8 +25,10 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
     if (!count[r]) continue;
     const double d = dev(r);
     if (d > level) {
+      // the first occupied row from the far end is reached: the wave has arrived at the body's
+      // far end (a free top released, ejecta flying): no front left to track
+      if (prev < 0) return std::numeric_limits<double>::quiet_NaN();
       const double yc = y0 + (r + 0.5) * dy;
-      if (prev < 0) return yc;
       const double yp = y0 + (prev + 0.5) * dy, dp = dev(prev);
       return yp + (yc - yp) * (level - dp) / (d - dp);
     }

@@ -122,4 +122,7 @@ TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
   for (int r = 0; r < rows; ++r) P.vy[r] = -1000.0 * std::clamp((r - 100) / 10.0, 0.0, 1.0);
   const double y2 = front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true);
   CHECK(y2 * 1e6 == Approx((105 + 0.5) * 5.0));
+  // the wave has reached the far end (the top rows move up, released): no front
+  for (int r = 0; r < rows; ++r) P.vy[r] = r < 190 ? 0.0 : 300.0;
+  CHECK(std::isnan(front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true)));
 }
