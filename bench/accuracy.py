@@ -296,10 +296,10 @@ def main():
     default_fam = next((fam for fam, rs in fams.items() if len(rs) >= 3 and all(
         DEFAULTS.get(k) == v for k, v in fam)), None)
     for fam, rs in fams.items():
-        lim = limits[str(dict(fam if default_fam is None else default_fam))]
+        ref = str(dict(fam if default_fam is None else default_fam))
+        lim = limits[ref]
         for r in rs:
-            r["reference"] = str(dict(fam if default_fam is None else default_fam)) or "defaults"
-        for r in rs:
+            r["reference"] = ref
             r["errors"] = {q: (r["values"][q] - lim[q]["limit"]) / abs(lim[q]["limit"]) if lim[q]["limit"] else math.nan
                            for q in POROUS_Q if q not in ("open", "Uy", "energy")}
             r["errors"]["open"] = r["values"]["open"]  # open porosity: its own error (truth 0)
@@ -314,7 +314,7 @@ def main():
     lines = [f"# Speed against error ({args.matrix} matrix, {stamp})", "",
              f"`/usr/bin/python3 bench/accuracy.py --matrix {args.matrix}`; errors relative (open porosity and "
              "L1_v absolute, U_y over the 1000 m/s impact speed); cost at " + str(args.threads) + " threads. "
-             "Porous errors against " + (f"the default settings' limit {default_fam and dict(default_fam)}"
+             "Porous errors against " + (f"the default settings' limit {dict(default_fam)}"
                                          if default_fam is not None else "each setting family's own limit") + ".", ""]
     for scene, qs in (("dense", ["Us", "wall", "P", "rho", "T", "L1_v", "energy"]), ("porous", POROUS_Q)):
         rs = [r for r in rows if r["scene"] == scene]
