@@ -239,9 +239,16 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
     const bool on = !Selective || selectp[bodyp[p]];
     const double lxx = Lxxp[p], lxy = Lxyp[p], lyx = Lyxp[p], lyy = Lyyp[p];
     const double jinc = (1.0 + dt * lxx) * (1.0 + dt * lyy) - dt * dt * lxy * lyx;
-    const double V0 = Vp[p], V = V0 * jinc;
+    const double V0 = Vp[p], m = mp[p];
+    // debris (a point already expanded below rho_min, so fractured, stress-free) does not expand
+    // further: an isolated point keeps its APIC affine velocity, and its volume grew without
+    // bound (rho 1e-4 kg/m^3 at the study's free top), which read as solid in every volume
+    // sum (open porosity, the weld's volume fraction, uGIMP's domains). It still compresses,
+    // so it carries pressure again once packed back above rho_min. No work either way: it has
+    // no stress.
+    const double V = V0 * ((m < rho_min * V0) ? std::min(jinc, 1.0) : jinc);
     bad = std::min(bad, on & !(V > 0.0) ? static_cast<std::ptrdiff_t>(p) : static_cast<std::ptrdiff_t>(cnt));
-    const double m = mp[p], rho = m / V;
+    const double rho = m / V;
     const double dxy = 0.5 * (lxy + lyx), w = 0.5 * (lxy - lyx), trD = lxx + lyy;
     const double a0 = sxxp[p], b0 = syyp[p], c0 = sxyp[p];
     double sxx = a0, syy = b0, sxy = c0;
