@@ -8,7 +8,9 @@ size, then tabulates per run, for the region (default III) at the last series.cs
            fit window (default 100-190 ns)
   P        mean pressure [GPa]; rho the points' mean density [g/cc]; open the band's open
            porosity (series.csv open_porosity, 1 - sum V / band area)
-  zero-P   not here (needs snapshots): see docs/verification.md
+  zero-P   share of the region's points at exactly zero pressure (fractured: stress-free) in the
+           last snapshot (fields/snap_*.h5; needs h5py, '-' without snapshots); the region by
+           the points' current y, bounds from run.json
   energy   (total - initial) / initial from energy.csv; residual likewise
   cost     particle-steps and wall seconds (run.json)
 
@@ -48,6 +50,25 @@ def front_speed(outdir, window):
     return float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3  # um/ns -> m/s
 
 
+def zero_pressure_share(outdir, run, region):
+    """Share of the region's points with p == 0 in the last snapshot, or nan."""
+    fields = os.path.join(outdir, "fields")
+    snaps = sorted(f for f in os.listdir(fields) if f.startswith("snap_") and f.endswith(".h5")) if os.path.isdir(fields) else []
+    reg = next((r for r in run.get("regions", []) if r["name"] == region), None)
+    if not snaps or reg is None:
+        return math.nan
+    try:
+        import h5py
+    except ImportError:
+        return math.nan
+    with h5py.File(os.path.join(fields, snaps[-1]), "r") as f:
+        y = f["particles/position"][:, 1] * 1e6  # m -> um
+        p = f["particles/pressure"][:]
+        body = f["particles/body"][:]
+    sel = (body == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
+    return float(np.count_nonzero(p[sel] == 0.0)) / max(1, int(sel.sum()))
+
+
 def summarise(outdir, region, window):
     run = json.load(open(os.path.join(outdir, "run.json")))
     series = [r for r in read_csv(os.path.join(outdir, "series.csv")) if r["region"] == region]
@@ -64,6 +85,7 @@ def summarise(outdir, region, window):
         "open": float(last.get("open_porosity", "nan")),
         "R2": float(last["R2_mean_per_us2"]),
         "D2": float(last["D2_mean_per_us2"]),
+        "zeroP": zero_pressure_share(outdir, run, region),
         "energy": (e1 - e0) / e0,
         "residual": res / e0,
         "particle_steps": run["particles"] * run["steps"],
@@ -117,13 +139,13 @@ def main():
           f"Richardson limit of the front: {limit:.0f} m/s; fully compacted Rankine-Hugoniot front: {rh:.0f} m/s.")
     print()
     print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho [g/cc] | open porosity | <R^2> / <D^2> [1/us^2] "
-          "| energy | particle-steps | wall [s] |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+          "| zero-P | energy | particle-steps | wall [s] |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         vl = (r["front"] / limit - 1) * 100 if math.isfinite(limit) else math.nan
         vr = (r["front"] / rh - 1) * 100 if math.isfinite(rh) else math.nan
         print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} "
-              f"| {r['open'] * 100:.1f} % | {r['R2']:.1f} / {r['D2']:.1f} | {r['energy'] * 100:+.2g} % "
+              f"| {r['open'] * 100:.1f} % | {r['R2']:.1f} / {r['D2']:.1f} | {r['zeroP'] * 100:.1f} % | {r['energy'] * 100:+.2g} % "
               f"| {r['particle_steps']:.3g} | {r['wall_s']:.1f} |")
 
 

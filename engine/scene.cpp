@@ -254,7 +254,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     const bool can = porous && !s.solver.contact && s.solver.scheme == Scheme::USL;
     if (r.choice("void_faces", {"separate", "single_field"}, can ? "separate" : "single_field") == "separate") {
       s.solver.void_faces = VoidFaces::Separate;
-      s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.8);
+      s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
       void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
     } else {
       for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells"})

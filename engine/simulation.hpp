@@ -63,7 +63,7 @@ struct SolverConfig {
   double friction = 0.0;                 // Coulomb mu
   double contact_volume_fraction = 1.0;  // nodal volume (in cells) needed for contact
   VoidFaces void_faces = VoidFaces::SingleField;
-  double void_face_volume_fraction = 0.8;  // nodal volume (in cells) at which the faces weld (docs/method.md)
+  double void_face_volume_fraction = 0.9;  // nodal volume (in cells) at which the faces weld (docs/method.md)
   int fields() const { return contact || void_faces == VoidFaces::Separate ? 2 : 1; }
 };
 

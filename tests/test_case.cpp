@@ -278,7 +278,7 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
     return build_scene(doc, "s", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
   };
   CHECK(build({}).solver.void_faces == VoidFaces::Separate);  // the default with voids
-  CHECK(build({}).solver.void_face_volume_fraction == 0.8);
+  CHECK(build({}).solver.void_face_volume_fraction == 0.9);
   CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_volume_fraction=0.9"}),
                     Catch::Contains("applies with contact.void_faces = \"separate\" only"));
   CHECK_THROWS_WITH(build({"contact.void_faces=\"separte\""}), Catch::Contains("'separate', 'single_field'"));
