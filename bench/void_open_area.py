@@ -85,6 +85,8 @@ def main():
     dense_case = os.path.join(a.out, "void_collapse_dense.toml")
     os.makedirs(a.out, exist_ok=True)
     with open(dense_case, "w") as f:
+        # written outside cases/: name the library the void case finds next to it (cases/materials.toml)
+        f.write(f'materials_file = "{os.path.join(os.path.dirname(os.path.dirname(CASE)), "materials.toml")}"\n')
         f.write(text.split("[bodies.voids]")[0])
     v, width = 1000.0, 64.0
     failed = 0
