@@ -8,6 +8,9 @@ size, then tabulates per run, for the region (default III) at the last series.cs
            fit window (default 100-190 ns)
   P        mean pressure [GPa]; rho the points' mean density [g/cc]; open the band's open
            porosity (series.csv open_porosity, 1 - sum V / band area)
+  bulk     the band's bulk density [g/cc]: its points' mass over its area (count x the target's
+           mass per point, rho0 x area / points: equal masses, a lattice sample; the grid's
+           width, periodic sides)
   zero-P   share of the region's points at exactly zero pressure (fractured: stress-free) in the
            last snapshot (fields/snap_*.h5; needs h5py, '-' without snapshots); the region by
            the points' current y, bounds from run.json
@@ -69,6 +72,20 @@ def zero_pressure_share(outdir, run, region):
     return float(np.count_nonzero(p[sel] == 0.0)) / max(1, int(sel.sum()))
 
 
+def bulk_density(run, region, count):
+    """Mass of the region's points over its area [g/cc] (equal point masses, periodic width), or nan."""
+    try:
+        body = next(b for b in run["bodies"] if b["name"] == "target")
+        rho0 = run["case_resolved"]["materials"][body["material"]]["density_kg_m3"]
+        reg = next(r for r in run["regions"] if r["name"] == region)
+        gx = run["case_resolved"]["grid"]["x_range_um"]
+    except (KeyError, StopIteration):
+        return math.nan
+    m = rho0 * body["area_m2"] / body["particles"]  # kg/m per point
+    area = (gx[1] - gx[0]) * (reg["y_range_um"][1] - reg["y_range_um"][0]) * 1e-12
+    return count * m / area / 1000.0
+
+
 def summarise(outdir, region, window):
     run = json.load(open(os.path.join(outdir, "run.json")))
     series = [r for r in read_csv(os.path.join(outdir, "series.csv")) if r["region"] == region]
@@ -82,6 +99,7 @@ def summarise(outdir, region, window):
         "front": front_speed(outdir, window),
         "P": float(last["P_mean_GPa"]),
         "rho": float(last["rho_mean_gcc"]),
+        "bulk": bulk_density(run, region, float(last["count"])),
         "open": float(last.get("open_porosity", "nan")),
         "R2": float(last["R2_mean_per_us2"]),
         "D2": float(last["D2_mean_per_us2"]),
@@ -138,13 +156,13 @@ def main():
     print(f"Front over {window[0]:g}-{window[1]:g} ns; region {a.region} at {rows[0]['time_ns']:g} ns. "
           f"Richardson limit of the front: {limit:.0f} m/s; fully compacted Rankine-Hugoniot front: {rh:.0f} m/s.")
     print()
-    print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho [g/cc] | open porosity | <R^2> / <D^2> [1/us^2] "
+    print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho points / bulk [g/cc] | open porosity | <R^2> / <D^2> [1/us^2] "
           "| zero-P | energy | particle-steps | wall [s] |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         vl = (r["front"] / limit - 1) * 100 if math.isfinite(limit) else math.nan
         vr = (r["front"] / rh - 1) * 100 if math.isfinite(rh) else math.nan
-        print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} "
+        print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} / {r['bulk']:.3f} "
               f"| {r['open'] * 100:.1f} % | {r['R2']:.1f} / {r['D2']:.1f} | {r['zeroP'] * 100:.1f} % | {r['energy'] * 100:+.2g} % "
               f"| {r['particle_steps']:.3g} | {r['wall_s']:.1f} |")
 
