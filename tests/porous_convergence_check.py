@@ -1,0 +1,70 @@
+#!/usr/bin/python3
+"""Checks of bench/porous_convergence.py's band measures on synthetic outputs (exact answers).
+
+- bulk_density: a band's points' mass over its area, count x rho0 x (body area / points) over the
+  grid's width x the band's height, in g/cc; nan when run.json lacks what it needs;
+- zero_pressure_share: in the LAST snapshot (by name), of the band's points (the region's body, y
+  inside its bounds by current position), the share at exactly zero pressure; nan without
+  snapshots or without the region.
+
+  /usr/bin/python3 tests/porous_convergence_check.py SOURCE_DIR
+"""
+import json
+import math
+import os
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+SRC = sys.argv[1]
+sys.path.insert(0, os.path.join(SRC, "bench"))
+import porous_convergence as pc  # noqa: E402
+
+fails = []
+
+
+def check(cond, what):
+    if not cond:
+        fails.append(what)
+        print("FAIL:", what)
+
+
+run = {
+    "bodies": [{"name": "target", "material": "al", "area_m2": 1e-10, "particles": 100}],
+    "case_resolved": {"materials": {"al": {"density_kg_m3": 2700.0}}, "grid": {"x_range_um": [0.0, 10.0]}},
+    "regions": [{"name": "III", "body": 0, "y_range_um": [0.0, 10.0]}],
+}
+# 25 points of mass 2700 x 1e-10 / 100 = 2.7e-9 kg/m over 10 x 10 um^2: 675 kg/m^3
+b = pc.bulk_density(run, "III", 25.0)
+check(abs(b - 0.675) < 1e-12, f"bulk density 0.675 g/cc, got {b}")
+check(math.isnan(pc.bulk_density(run, "I", 25.0)), "bulk density of a missing region is nan")
+check(math.isnan(pc.bulk_density({"bodies": []}, "III", 25.0)), "bulk density without a target is nan")
+
+
+def snapshot(path, y_um, p, body):
+    with h5py.File(path, "w") as f:
+        n = len(y_um)
+        pos = np.zeros((n, 2))
+        pos[:, 1] = np.asarray(y_um) * 1e-6
+        f["particles/position"] = pos
+        f["particles/pressure"] = np.asarray(p, dtype=float)
+        f["particles/body"] = np.asarray(body, dtype=np.uint8)
+
+
+with tempfile.TemporaryDirectory() as d:
+    check(math.isnan(pc.zero_pressure_share(d, run, "III")), "no snapshots: nan")
+    os.makedirs(os.path.join(d, "fields"))
+    # an earlier snapshot with no zero pressure at all: must not be the one read
+    snapshot(os.path.join(d, "fields", "snap_00000002.h5"), [1, 2, 3], [1e9, 1e9, 1e9], [0, 0, 0])
+    # the last one: in the band (body 0, 0 <= y <= 10 um) 4 points, 1 at zero P; outside it a
+    # zero-P point above the band and one of another body
+    snapshot(os.path.join(d, "fields", "snap_00000010.h5"), [1, 2, 5, 9, 12, 5],
+             [0.0, 2e9, -1e8, 3e9, 0.0, 0.0], [0, 0, 0, 0, 0, 1])
+    z = pc.zero_pressure_share(d, run, "III")
+    check(abs(z - 0.25) < 1e-15, f"zero-P share 0.25, got {z}")
+    check(math.isnan(pc.zero_pressure_share(d, run, "II")), "a missing region: nan")
+
+print("porous_convergence checks:", "FAILED " + "; ".join(fails) if fails else "all passed")
+sys.exit(1 if fails else 0)
