@@ -12,7 +12,7 @@ size, then tabulates per run, for the region (default III) at the last series.cs
            mass per point, rho0 x area / points: equal masses, a lattice sample; the grid's
            width, periodic sides)
   zero-P   share of the region's points at exactly zero pressure (fractured: stress-free) in the
-           last snapshot (fields/snap_*.h5; needs h5py, '-' without snapshots); the region by
+           last snapshot (fields/snap_*.h5; needs h5py; nan without snapshots); the region by
            the points' current y, bounds from run.json
   energy   (total - initial) / initial from energy.csv; residual likewise
   cost     particle-steps and wall seconds (run.json)
