@@ -29,6 +29,7 @@ Figures in docs/verification.md ("Porous strip") come from this script.
 """
 import argparse
 import csv
+import glob
 import json
 import math
 import os
@@ -55,8 +56,7 @@ def front_speed(outdir, window):
 
 def zero_pressure_share(outdir, run, region):
     """Share of the region's points with p == 0 in the last snapshot, or nan."""
-    fields = os.path.join(outdir, "fields")
-    snaps = sorted(f for f in os.listdir(fields) if f.startswith("snap_") and f.endswith(".h5")) if os.path.isdir(fields) else []
+    snaps = sorted(glob.glob(os.path.join(outdir, "fields", "snap_*.h5")))
     reg = next((r for r in run.get("regions", []) if r["name"] == region), None)
     if not snaps or reg is None:
         return math.nan
@@ -64,7 +64,7 @@ def zero_pressure_share(outdir, run, region):
         import h5py
     except ImportError:
         return math.nan
-    with h5py.File(os.path.join(fields, snaps[-1]), "r") as f:
+    with h5py.File(snaps[-1], "r") as f:
         y = f["particles/position"][:, 1] * 1e6  # m -> um
         p = f["particles/pressure"][:]
         body = f["particles/body"][:]
