@@ -14,6 +14,8 @@ size, then tabulates per run, for the region (default III) at the last series.cs
   zero-P   share of the region's points at exactly zero pressure (fractured: stress-free) in the
            last snapshot (fields/snap_*.h5; needs h5py; nan without snapshots); the region by
            the points' current y, bounds from run.json
+  (gaps + fractured)  the open porosity's two parts in that snapshot: space no point's volume
+           covers, and the expansion of fractured points past solid density (open_split)
   energy   (total - initial) / initial from energy.csv; residual likewise
   cost     particle-steps and wall seconds (run.json)
 
@@ -54,35 +56,73 @@ def front_speed(outdir, window):
     return float(np.polyfit(t[sel], y[sel], 1)[0]) * 1e3  # um/ns -> m/s
 
 
-def zero_pressure_share(outdir, run, region):
-    """Share of the region's points with p == 0 in the last snapshot, or nan."""
+def last_band(outdir, run, region):
+    """The region's points in the last snapshot (fields/snap_*.h5, by name; the region by the points'
+    body and current y, bounds from run.json): a dict of arrays (density, pressure, stress_*), or
+    None without snapshots, h5py or the region."""
     snaps = sorted(glob.glob(os.path.join(outdir, "fields", "snap_*.h5")))
     reg = next((r for r in run.get("regions", []) if r["name"] == region), None)
     if not snaps or reg is None:
-        return math.nan
+        return None
     try:
         import h5py
     except ImportError:
-        return math.nan
+        return None
     with h5py.File(snaps[-1], "r") as f:
         y = f["particles/position"][:, 1] * 1e6  # m -> um
-        p = f["particles/pressure"][:]
-        body = f["particles/body"][:]
-    sel = (body == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
-    return float(np.count_nonzero(p[sel] == 0.0)) / max(1, int(sel.sum()))
+        sel = (f["particles/body"][:] == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
+        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy"]
+        return {k: f["particles/" + k][:][sel] for k in names if "particles/" + k in f}
 
 
-def bulk_density(run, region, count):
-    """Mass of the region's points over its area [g/cc] (equal point masses, periodic width), or nan."""
+def zero_pressure_share(outdir, run, region):
+    """Share of the region's points with p == 0 in the last snapshot, or nan."""
+    band = last_band(outdir, run, region)
+    if band is None:
+        return math.nan
+    p = band["pressure"]
+    return float(np.count_nonzero(p == 0.0)) / max(1, len(p))
+
+
+def open_split(outdir, run, region):
+    """The band's open porosity in two parts, fractions of its area, from the last snapshot:
+    (gaps, fractured): gaps = 1 - sum V / area, the space no point's volume V = m / rho covers
+    (negative where points overlap); fractured = sum over fractured points (zero pressure and zero
+    stress, the engine's test) of V - min(V, m / rho0), the expansion of cracked points past solid
+    density, which series.csv's open_porosity counts as void too (engine/diagnostics.cpp,
+    solid_volume). Their sum is that open_porosity at the snapshot's time. Equal point masses
+    (a lattice sample) as in bulk_density; (nan, nan) without what it needs."""
+    band, geom = last_band(outdir, run, region), band_geometry(run, region)
+    if band is None or geom is None or "density" not in band or "stress_xy" not in band:
+        return math.nan, math.nan
+    m, area, rho0 = geom
+    V = m / band["density"]
+    fr = (band["pressure"] == 0.0) & (band["stress_xx"] == 0.0) & (band["stress_yy"] == 0.0) & (band["stress_xy"] == 0.0)
+    excess = float(np.sum(V[fr] - np.minimum(V[fr], m / rho0)))
+    return 1.0 - float(V.sum()) / area, excess / area
+
+
+def band_geometry(run, region):
+    """(mass per point [kg/m], band area [m^2], rho0 [kg/m^3]) of the target's region from
+    run.json: equal point masses (a lattice sample), the grid's width (periodic sides); None
+    without what it needs."""
     try:
         body = next(b for b in run["bodies"] if b["name"] == "target")
         rho0 = run["case_resolved"]["materials"][body["material"]]["density_kg_m3"]
         reg = next(r for r in run["regions"] if r["name"] == region)
         gx = run["case_resolved"]["grid"]["x_range_um"]
     except (KeyError, StopIteration):
+        return None
+    m = rho0 * body["area_m2"] / body["particles"]
+    return m, (gx[1] - gx[0]) * (reg["y_range_um"][1] - reg["y_range_um"][0]) * 1e-12, rho0
+
+
+def bulk_density(run, region, count):
+    """Mass of the region's points over its area [g/cc] (equal point masses, periodic width), or nan."""
+    geom = band_geometry(run, region)
+    if geom is None:
         return math.nan
-    m = rho0 * body["area_m2"] / body["particles"]  # kg/m per point
-    area = (gx[1] - gx[0]) * (reg["y_range_um"][1] - reg["y_range_um"][0]) * 1e-12
+    m, area, _ = geom
     return count * m / area / 1000.0
 
 
@@ -104,6 +144,7 @@ def summarise(outdir, region, window):
         "R2": float(last["R2_mean_per_us2"]),
         "D2": float(last["D2_mean_per_us2"]),
         "zeroP": zero_pressure_share(outdir, run, region),
+        "split": open_split(outdir, run, region),
         "energy": (e1 - e0) / e0,
         "residual": res / e0,
         "particle_steps": run["particles"] * run["steps"],
@@ -156,14 +197,14 @@ def main():
     print(f"Front over {window[0]:g}-{window[1]:g} ns; region {a.region} at {rows[0]['time_ns']:g} ns. "
           f"Richardson limit of the front: {limit:.0f} m/s; fully compacted Rankine-Hugoniot front: {rh:.0f} m/s.")
     print()
-    print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho points / bulk [g/cc] | open porosity | <R^2> / <D^2> [1/us^2] "
+    print("| h [um] | front [m/s] | vs limit | vs RH | P [GPa] | rho points / bulk [g/cc] | open porosity (gaps + fractured) | <R^2> / <D^2> [1/us^2] "
           "| zero-P | energy | particle-steps | wall [s] |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         vl = (r["front"] / limit - 1) * 100 if math.isfinite(limit) else math.nan
         vr = (r["front"] / rh - 1) * 100 if math.isfinite(rh) else math.nan
         print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} / {r['bulk']:.3f} "
-              f"| {r['open'] * 100:.1f} % | {r['R2']:.1f} / {r['D2']:.1f} | {r['zeroP'] * 100:.1f} % | {r['energy'] * 100:+.2g} % "
+              f"| {r['open'] * 100:.1f} % ({r['split'][0] * 100:.1f} + {r['split'][1] * 100:.1f}) | {r['R2']:.1f} / {r['D2']:.1f} | {r['zeroP'] * 100:.1f} % | {r['energy'] * 100:+.2g} % "
               f"| {r['particle_steps']:.3g} | {r['wall_s']:.1f} |")
 
 

@@ -5,7 +5,9 @@
   grid's width x the band's height, in g/cc; nan when run.json lacks what it needs;
 - zero_pressure_share: in the LAST snapshot (by name), of the band's points (the region's body, y
   inside its bounds by current position), the share at exactly zero pressure; nan without
-  snapshots or without the region.
+  snapshots or without the region;
+- open_split: in that snapshot, 1 - sum V / area and the fractured points' expansion past m / rho0
+  over the area.
 
   /usr/bin/python3 tests/porous_convergence_check.py SOURCE_DIR
 """
@@ -43,7 +45,7 @@ check(math.isnan(pc.bulk_density(run, "I", 25.0)), "bulk density of a missing re
 check(math.isnan(pc.bulk_density({"bodies": []}, "III", 25.0)), "bulk density without a target is nan")
 
 
-def snapshot(path, y_um, p, body):
+def snapshot(path, y_um, p, body, rho=None, sxy=None):
     with h5py.File(path, "w") as f:
         n = len(y_um)
         pos = np.zeros((n, 2))
@@ -51,6 +53,11 @@ def snapshot(path, y_um, p, body):
         f["particles/position"] = pos
         f["particles/pressure"] = np.asarray(p, dtype=float)
         f["particles/body"] = np.asarray(body, dtype=np.uint8)
+        if rho is not None:
+            f["particles/density"] = np.asarray(rho, dtype=float)
+            f["particles/stress_xx"] = -np.asarray(p, dtype=float)
+            f["particles/stress_yy"] = -np.asarray(p, dtype=float)
+            f["particles/stress_xy"] = np.asarray(sxy, dtype=float)
 
 
 with tempfile.TemporaryDirectory() as d:
@@ -65,6 +72,18 @@ with tempfile.TemporaryDirectory() as d:
     z = pc.zero_pressure_share(d, run, "III")
     check(abs(z - 0.25) < 1e-15, f"zero-P share 0.25, got {z}")
     check(math.isnan(pc.zero_pressure_share(d, run, "II")), "a missing region: nan")
+    check(all(math.isnan(v) for v in pc.open_split(d, run, "III")), "open_split without densities: nan")
+    # points of 2.7e-9 kg/m (m / rho0 = 1e-12 m^2); in the band: one at rho0 (V = 1e-12), one
+    # compressed (rho 5400: 0.5e-12), one fractured at 1350 (V = 2e-12, 1e-12 of it crack) and
+    # one at zero pressure but sheared (not fractured, V = 2e-12 counted whole); area 1e-10:
+    # gaps 1 - 5.5e-12 / 1e-10 = 0.945, fractured 1e-12 / 1e-10 = 0.01
+    snapshot(os.path.join(d, "fields", "snap_00000011.h5"), [1, 2, 5, 9, 12],
+             [1e9, 2e9, 0.0, 0.0, 0.0], [0, 0, 0, 0, 0], rho=[2700, 5400, 1350, 1350, 100],
+             sxy=[0.0, 0.0, 0.0, 1e6, 0.0])
+    g, fr = pc.open_split(d, run, "III")
+    check(abs(g - 0.945) < 1e-12, f"gaps 0.945, got {g}")
+    check(abs(fr - 0.01) < 1e-12, f"fractured expansion 0.01, got {fr}")
+    check(all(math.isnan(v) for v in pc.open_split(d, run, "II")), "open_split of a missing region: nan")
 
 print("porous_convergence checks:", "FAILED " + "; ".join(fails) if fails else "all passed")
 sys.exit(1 if fails else 0)
