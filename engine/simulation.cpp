@@ -159,7 +159,16 @@ void Simulation::bin_particles() {
 }
 
 transfer::StepArgs Simulation::transfer_args() {
-  return {grid_.geom, grid_.view(), pview(), P_.size(), order_.data(), cell_start_.data(), box_, cfg_, transfer_heat()};
+  auto P = pview();
+  // The USL gather and MUSL's APIC velocity pass exist only as the heating gather (engine/
+  // transfer_step_impl.hpp). Without an energy field it heats heat_sink_, which nothing reads:
+  // the velocities, positions, L and C are those of a gather without heating (up to the sign
+  // of a zero: L's mid-step term is 0 * (v_new - v_old) there), at the cost of the heating sums.
+  if (!P.e && (cfg_.scheme == Scheme::USL || cfg_.transfer == Transfer::APIC)) {
+    if (heat_sink_.size() != P_.size()) heat_sink_.assign(P_.size(), 0.0);
+    P.e = heat_sink_.data();
+  }
+  return {grid_.geom, grid_.view(), P, P_.size(), order_.data(), cell_start_.data(), box_, cfg_};
 }
 
 void Simulation::scatter_to_grid() {
@@ -412,7 +421,7 @@ std::size_t Simulation::bytes() const {
   return P_.bytes() + grid_.bytes() +
          (key_.capacity() + order_.capacity() + cell_start_.capacity() + hist_.capacity() + scratch_u_.capacity()) *
              sizeof(std::uint32_t) +
-         (scratch_d_.capacity() + gather_scratch_.capacity()) * sizeof(double) + scratch_b_.capacity();
+         (scratch_d_.capacity() + gather_scratch_.capacity() + heat_sink_.capacity()) * sizeof(double) + scratch_b_.capacity();
 }
 
 }  // namespace smpm

@@ -184,6 +184,7 @@ class Simulation {
   double box_nodes_ = 0.0;  // sum over steps of the box's node count
   std::vector<double> scratch_d_;
   std::vector<double> gather_scratch_;  // L of a block per thread (kern::g2p_blocks), when not stored
+  std::vector<double> heat_sink_;       // what the heating gather heats without an energy field (transfer_args)
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;
   std::vector<double> row_force_, row_loss_;

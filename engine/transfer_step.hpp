@@ -1,7 +1,7 @@
 // The transfers of one step (P2G scatter; G2P gather with the constitutive update behind it),
 // for one shape function each. Simulation calls them through kern::with_shape. Each shape's
 // transfers are compiled in a translation unit of their own (engine/transfer_<shape>.cpp): the
-// variants (transfer, scheme, contact, heating) are many vectorized loops per shape, and in one
+// variants (transfer, scheme, contact) are many vectorized loops per shape, and in one
 // file they were most of the engine's compile time.
 #pragma once
 #include <cstddef>
@@ -17,13 +17,14 @@ namespace smpm::transfer {
 struct StepArgs {
   const kern::GridGeom& g;
   kern::GridView G;
-  kern::ParticleView P;  // with velocity fields when contact is on (Simulation::pview)
+  // with velocity fields when contact is on (Simulation::pview); e is never null where the
+  // gather heats (USL, MUSL's APIC velocity pass): a scratch array without an energy field
+  kern::ParticleView P;
   std::size_t n;
   const std::uint32_t* order;
   const std::uint32_t* cell_start;
   kern::NodeBox box;
   const SolverConfig& cfg;
-  bool heat;  // APIC, or FLIP with USL, with an energy field: the gather heats the particles (Simulation::transfer_heat)
 };
 
 // The constitutive update of a block of points [first, last) with their gradient L, which the

@@ -35,12 +35,13 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   const std::size_t n = a.n;
   const bool flip = a.cfg.transfer == Transfer::FLIP;
   if (a.cfg.scheme == Scheme::USL) {
+    // always the heating gather (a scene without an energy field heats a scratch array:
+    // Simulation::transfer_args); the one without heating would be a fourth of these files'
+    // compile time for scenes that are not the study's
     auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
       constexpr int C = decltype(contact)::value;
-      if (flip && a.heat) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
-      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
-      if (a.heat) return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
-      return kern::g2p_blocks<S, false, G2PWhat::Full, false, C, Result>(g, G, pv, n, q, L_buffer, update);
+      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
+      return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
     };
     if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
     if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
@@ -49,8 +50,7 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   // MUSL: new particle velocities, remap their momentum to the grid, then move the particles
   // and take the velocity gradient from the remapped grid velocity.
   if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
-  else if (a.heat) kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);
-  else kern::g2p<S, false, G2PWhat::Velocity>(g, G, pv, n, q);
+  else kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);  // heating, as USL's
   kern::clear_grid(g, a.box, G, false);
   if (a.cfg.transfer == Transfer::APIC)
     kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, a.order, a.cell_start, q.lp);
