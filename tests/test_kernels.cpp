@@ -83,6 +83,20 @@ Bins bin(const GridGeom& g, const Particles& P) {
   return b;
 }
 
+// A step's grid for the gather tests: P scattered (APIC or not) and the grid updated with dt
+// (FLIP: its increments too), over all nodes
+template <class S, bool APIC>
+void scatter_and_update(const GridGeom& g, Particles& P, const GridView& G, double dt, bool flip) {
+  const Bins b = bin(g, P);
+  auto pv = P.view();
+  clear_grid(g, g.all_nodes(), G, true);
+  p2g_colored<S, APIC, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
+  GridUpdateParams q;
+  q.dt = dt;
+  q.flip = flip;
+  grid_update(g, g.all_nodes(), G, q, nullptr);
+}
+
 }  // namespace
 
 namespace {
@@ -447,17 +461,10 @@ TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities
           "[transfer]") {
   const GridGeom g = make_geom(false);
   Particles P = random_particles(g, 3000, 17);
-  Bins b = bin(g, P);
   Grid grid(g, true);
   auto G = grid.view();
-  auto pv = P.view();
-  clear_grid(g, g.all_nodes(), G, true);
-  p2g_colored<Linear, false, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
-  GridUpdateParams q;
-  q.dt = 1e-4;
-  q.flip = true;
-  grid_update(g, g.all_nodes(), G, q, nullptr);
-  const G2PParams gq{q.dt, 0.25, 1.0};
+  scatter_and_update<Linear, false>(g, P, G, 1e-4, true);
+  const G2PParams gq{1e-4, 0.25, 1.0};
   Particles A = P, B = P;
   auto pa = A.view(), pb = B.view();
   g2p<Linear, true, G2PWhat::Velocity>(g, G, pa, A.size(), gq);                      // pure FLIP body
@@ -478,18 +485,9 @@ template <class S, bool FLIP, G2PWhat What>
 void check_heat_sink() {
   const GridGeom g = make_geom(false);
   Particles P = random_particles(g, 3000, 29);
-  Bins b = bin(g, P);
   Grid grid(g, FLIP);
   auto G = grid.view();
-  {
-    auto pv = P.view();
-    clear_grid(g, g.all_nodes(), G, true);
-    p2g_colored<S, !FLIP, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
-    GridUpdateParams q;
-    q.dt = 1e-4;
-    q.flip = FLIP;
-    grid_update(g, g.all_nodes(), G, q, nullptr);
-  }
+  scatter_and_update<S, !FLIP>(g, P, G, 1e-4, FLIP);
   const G2PParams gq{1e-4, 0.25, 0.95, 0.0};
   Particles A = P, B = P;
   std::vector<double> sink(P.size(), 0.0);
@@ -536,17 +534,9 @@ void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
   // volumes that the update makes non-positive (V <= 0 stays so): the lowest index is reported
   P.V[2100] = -1e-5;
   P.V[1700] = -1e-5;
-  Bins b = bin(g, P);
   Grid grid(g, true);
   auto G = grid.view();
-  {
-    auto pv = P.view();
-    clear_grid(g, g.all_nodes(), G, true);
-    p2g_colored<S, What == G2PWhat::Full, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
-    GridUpdateParams q;
-    q.dt = 1e-4;
-    grid_update(g, g.all_nodes(), G, q, nullptr);
-  }
+  scatter_and_update<S, What == G2PWhat::Full>(g, P, G, 1e-4, false);
   const G2PParams gq{1e-4, 0.25, 0.0};
   ConstitutiveParams cq;
   cq.dt = 1e-4;
