@@ -164,7 +164,7 @@ transfer::StepArgs Simulation::transfer_args() {
   // transfer_step_impl.hpp). Without an energy field it heats heat_sink_, which nothing reads:
   // the velocities, positions, L and C are those of a gather without heating (up to the sign
   // of a zero: L's mid-step term is 0 * (v_new - v_old) there), at the cost of the heating sums.
-  if (!P.e && (cfg_.scheme == Scheme::USL || cfg_.transfer == Transfer::APIC)) {
+  if (!P.e && gather_heats()) {
     if (heat_sink_.size() != P_.size()) heat_sink_.assign(P_.size(), 0.0);
     P.e = heat_sink_.data();
   }

@@ -161,9 +161,10 @@ class Simulation {
   transfer::StepArgs transfer_args();  // what the transfers read (engine/transfer_step.hpp)
   // APIC, or FLIP with USL, with an energy field: the transfers' kinetic-energy dissipation
   // heats the particles (see kern::g2p_particle), so total energy is conserved by the transfers.
-  bool transfer_heat() const {
-    return !P_.e.empty() && (cfg_.transfer == Transfer::APIC || cfg_.scheme == Scheme::USL);
-  }
+  bool transfer_heat() const { return !P_.e.empty() && gather_heats(); }
+  // the passes compiled only as the heating gather run (USL's gather, MUSL's APIC velocity
+  // pass): without an energy field they heat heat_sink_ (transfer_args)
+  bool gather_heats() const { return cfg_.transfer == Transfer::APIC || cfg_.scheme == Scheme::USL; }
   // USL strain rate from the mid-step grid velocity (StrainRate, resolved in the constructor)
   bool midstep_ = false;
 
