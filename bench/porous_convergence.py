@@ -15,7 +15,8 @@ size, then tabulates per run, for the region (default III) at the last series.cs
            last snapshot (fields/snap_*.h5; needs h5py; nan without snapshots); the region by
            the points' current y, bounds from run.json
   (gaps + fractured)  the open porosity's two parts in that snapshot: space no point's volume
-           covers, and the expansion of fractured points past solid density (open_split)
+           covers, and the expansion of fractured points past the zero-pressure density of their
+           energy (open_split)
   energy   (total - initial) / initial from energy.csv; residual likewise
   cost     particle-steps and wall seconds (run.json)
 
@@ -71,7 +72,7 @@ def last_band(outdir, run, region):
     with h5py.File(snaps[-1], "r") as f:
         y = f["particles/position"][:, 1] * 1e6  # m -> um
         sel = (f["particles/body"][:] == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
-        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy"]
+        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy", "energy", "temperature"]
         return {k: f["particles/" + k][:][sel] for k in names if "particles/" + k in f}
 
 
@@ -84,21 +85,41 @@ def zero_pressure_share(outdir, run, region):
     return float(np.count_nonzero(p == 0.0)) / max(1, len(p))
 
 
+def zero_pressure_density(run, energy, rho0):
+    """Density [kg/m^3] at which intact target material of specific internal energy `energy`
+    [J/kg] has zero pressure: Mie-Grueneisen's tension branch rho0 (1 - gamma0 rho0 e / (rho0
+    c0^2)), rho0 for e <= 0 (kernels/constitutive.hpp, zero_pressure_density); rho0 for another
+    EOS or without energies."""
+    try:
+        body = next(b for b in run["bodies"] if b["name"] == "target")
+        mat = run["case_resolved"]["materials"][body["material"]]
+    except (KeyError, StopIteration):
+        return rho0
+    if energy is None or mat.get("eos") != "mie_gruneisen":
+        return rho0
+    c0, g0 = mat["bulk_sound_speed_m_s"], mat["gruneisen_gamma"]
+    return rho0 * (1.0 - g0 * np.maximum(energy, 0.0) / (c0 * c0))
+
+
 def open_split(outdir, run, region):
     """The band's open porosity in two parts, fractions of its area, from the last snapshot:
     (gaps, fractured): gaps = 1 - sum V / area, the space no point's volume V = m / rho covers
     (negative where points overlap); fractured = sum over fractured points (zero pressure and zero
-    stress, the engine's test) of V - min(V, m / rho0), the expansion of cracked points past solid
-    density, which series.csv's open_porosity counts as void too (engine/diagnostics.cpp,
-    solid_volume). Their sum is that open_porosity at the snapshot's time. Equal point masses
-    (a lattice sample) as in bulk_density; (nan, nan) without what it needs."""
+    stress, the engine's test) of V - min(V, m / rho_zp), the expansion of cracked points past the
+    density intact material of their energy has at zero pressure (zero_pressure_density; their
+    thermal expansion is solid), which series.csv's open_porosity counts as void too
+    (engine/diagnostics.cpp, solid_volume). Their sum is that open_porosity at the snapshot's
+    time. Equal point masses (a lattice sample) as in bulk_density; (nan, nan) without what it
+    needs."""
     band, geom = last_band(outdir, run, region), band_geometry(run, region)
     if band is None or geom is None or "density" not in band or "stress_xy" not in band:
         return math.nan, math.nan
     m, area, rho0 = geom
     V = m / band["density"]
     fr = (band["pressure"] == 0.0) & (band["stress_xx"] == 0.0) & (band["stress_yy"] == 0.0) & (band["stress_xy"] == 0.0)
-    excess = float(np.sum(V[fr] - np.minimum(V[fr], m / rho0)))
+    rho_zp = zero_pressure_density(run, band.get("energy"), rho0)
+    cap = m / (rho_zp[fr] if np.ndim(rho_zp) else rho_zp)
+    excess = float(np.sum(V[fr] - np.minimum(V[fr], cap)))
     return 1.0 - float(V.sum()) / area, excess / area
 
 

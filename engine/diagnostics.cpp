@@ -71,14 +71,23 @@ Moments moments(const std::vector<double>& v) {
 }
 
 // The volume of solid a point holds [m^2]: V_p, except for a fractured point (the constitutive
-// update's zero pressure and zero deviator, kernels/constitutive.hpp), which holds at most
-// m / rho0: its expansion past solid density is opened crack, i.e. void. Debris flying alone
-// keeps its APIC affine velocity gradient, so its V grows without bound (rho down to 1e-4
-// kg/m^3 was seen in the study's baseline at h = 2 um), and counted as solid it made a band's
-// open porosity -40 instead of +0.02. An unstressed point at rho0 holds V either way.
-static double solid_volume(const Particles& P, std::size_t i, double rho0) {
+// update's zero pressure and zero deviator, kernels/constitutive.hpp), which holds at most the
+// volume intact material of its mass and specific internal energy takes at zero pressure,
+// m / rho_zp(e) (Mie-Grueneisen: thermal expansion, rho_zp below rho0 for a heated point;
+// rho0 without an energy field): its expansion past that is opened crack, i.e. void. (Until
+// session 18 the cap was m / rho0, which counted the thermal expansion of the hot seams as
+// void too: 0.5 of the porous strip's 3.8 % open porosity at h = 4 um, docs/verification.md.)
+// Debris flying alone keeps its APIC affine velocity gradient, so its V grows without bound
+// (rho down to 1e-4 kg/m^3 was seen in the study's baseline at h = 2 um), and counted as solid
+// it made a band's open porosity -40 instead of +0.02. An unstressed point at rho0 holds V
+// either way.
+static double solid_volume(const Particles& P, std::size_t i, const Material& mat) {
   const bool fractured = P.p[i] == 0.0 && P.sxx[i] == 0.0 && P.syy[i] == 0.0 && P.sxy[i] == 0.0;
-  return fractured && rho0 > 0.0 ? std::min(P.V[i], P.m[i] / rho0) : P.V[i];
+  if (!fractured || mat.rho0 <= 0.0) return P.V[i];
+  const double rho_zp = mat.eos == EosKind::MieGruneisen && !P.e.empty()
+                            ? mat.mie_gruneisen().zero_pressure_density(P.e[i])
+                            : mat.rho0;
+  return std::min(P.V[i], P.m[i] / rho_zp);
 }
 
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
@@ -102,7 +111,7 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       out[r].S2 += gm.S2;
       out[r].R += gm.R;
       out[r].D += gm.D;
-      out[r].open += solid_volume(P, i, materials[k].rho0);
+      out[r].open += solid_volume(P, i, materials[k]);
     }
   }
   for (std::size_t r = 0; r < nr; ++r) {

@@ -144,6 +144,8 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
   if (!P.epsp.empty()) scal("plastic_strain", "1", [&](std::size_t i) { return P.epsp[i]; });
   if (!P.q.empty()) scal("viscous_pressure", "Pa", [&](std::size_t i) { return P.q[i]; });
   scal("body", "1", [&](std::size_t i) { return double(P.body[i]); });
+  // the velocity field a point scatters to (void faces, two-body contact): 0 or 1
+  if (!P.field.empty()) scal("field", "1", [&](std::size_t i) { return double(P.field[i]); });
   scal("id", "1", [&](std::size_t i) { return double(P.id[i]); });
   return f;
 }

@@ -61,6 +61,10 @@ struct MieGruneisenEos {
     return mu < 0.0 ? tension : compression;
   }
   SMPM_INLINE double pressure(double rho, double e) const { return cold(rho) + gamma_rho() * e; }
+  // Density at zero pressure for the specific internal energy e [J/kg], from the tension
+  // branch: rho0 (1 - Gamma rho0 e / C), below rho0 for a heated point (thermal expansion);
+  // rho0 for e <= 0.
+  double zero_pressure_density(double e) const { return rho0 * (1.0 - gamma_rho() * std::max(e, 0.0) / C); }
   // rho (dP/drho)_s = rho (dP/drho)_e + (dP/de)_rho P / rho, floored at zero in deep tension
   SMPM_INLINE double bulk_modulus(double rho, double P) const {
     return std::max(0.0, rho * dcold_drho(rho) + gamma_rho() * P / rho);

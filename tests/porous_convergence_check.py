@@ -7,7 +7,8 @@
   inside its bounds by current position), the share at exactly zero pressure; nan without
   snapshots or without the region;
 - open_split: in that snapshot, 1 - sum V / area and the fractured points' expansion past m / rho0
-  over the area.
+  over the area, past m / rho_zp(e) (the zero-pressure density of their energy) where the
+  snapshot has energies and the material is Mie-Grueneisen.
 
   /usr/bin/python3 tests/porous_convergence_check.py SOURCE_DIR
 """
@@ -45,7 +46,7 @@ check(math.isnan(pc.bulk_density(run, "I", 25.0)), "bulk density of a missing re
 check(math.isnan(pc.bulk_density({"bodies": []}, "III", 25.0)), "bulk density without a target is nan")
 
 
-def snapshot(path, y_um, p, body, rho=None, sxy=None):
+def snapshot(path, y_um, p, body, rho=None, sxy=None, energy=None):
     with h5py.File(path, "w") as f:
         n = len(y_um)
         pos = np.zeros((n, 2))
@@ -58,6 +59,8 @@ def snapshot(path, y_um, p, body, rho=None, sxy=None):
             f["particles/stress_xx"] = -np.asarray(p, dtype=float)
             f["particles/stress_yy"] = -np.asarray(p, dtype=float)
             f["particles/stress_xy"] = np.asarray(sxy, dtype=float)
+        if energy is not None:
+            f["particles/energy"] = np.asarray(energy, dtype=float)
 
 
 with tempfile.TemporaryDirectory() as d:
@@ -84,6 +87,21 @@ with tempfile.TemporaryDirectory() as d:
     check(abs(g - 0.945) < 1e-12, f"gaps 0.945, got {g}")
     check(abs(fr - 0.01) < 1e-12, f"fractured expansion 0.01, got {fr}")
     check(all(math.isnan(v) for v in pc.open_split(d, run, "II")), "open_split of a missing region: nan")
+    # the same points with energies, the material Mie-Grueneisen (c0 = 3000 m/s, gamma0 = 2):
+    # rho_zp = rho0 (1 - 2 e / c0^2); the fractured point at e = 2.25e5 J/kg has rho_zp = 0.95
+    # rho0, so 1e-12 / 0.95 of its V = 2e-12 is solid; energies of the others do not matter.
+    # Without energies, or another EOS, the cap stays m / rho0.
+    snapshot(os.path.join(d, "fields", "snap_00000012.h5"), [1, 2, 5, 9, 12],
+             [1e9, 2e9, 0.0, 0.0, 0.0], [0, 0, 0, 0, 0], rho=[2700, 5400, 1350, 1350, 100],
+             sxy=[0.0, 0.0, 0.0, 1e6, 0.0], energy=[1e6, 1e6, 2.25e5, 1e6, 1e6])
+    mg = json.loads(json.dumps(run))
+    mg["case_resolved"]["materials"]["al"].update(
+        {"eos": "mie_gruneisen", "bulk_sound_speed_m_s": 3000.0, "gruneisen_gamma": 2.0})
+    g, fr = pc.open_split(d, mg, "III")
+    check(abs(g - 0.945) < 1e-12, f"gaps with energies 0.945, got {g}")
+    check(abs(fr - (2e-12 - 1e-12 / 0.95) / 1e-10) < 1e-12, f"fractured expansion past m / rho_zp, got {fr}")
+    g, fr = pc.open_split(d, run, "III")
+    check(abs(fr - 0.01) < 1e-12, f"fractured expansion without the EOS keys 0.01, got {fr}")
 
 print("porous_convergence checks:", "FAILED " + "; ".join(fails) if fails else "all passed")
 sys.exit(1 if fails else 0)

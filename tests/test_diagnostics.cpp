@@ -104,6 +104,44 @@ TEST_CASE("open porosity: a fractured point holds no more solid than m / rho0", 
   CHECK(s[0].rho.mean == Approx((3000.0 + 2.7e-3 + 2700.0 / 1.01) / 3.0));
 }
 
+TEST_CASE("open porosity: a hot fractured point holds its zero-pressure volume, not m / rho0", "[diagnostics]") {
+  // Mie-Grueneisen aluminium: a fractured point at e keeps m / rho_zp(e) as solid, where intact
+  // material of that energy has zero pressure (its thermal expansion is not void); a cold one
+  // (e = 0) keeps m / rho0 as before.
+  Material m;
+  m.eos = EosKind::MieGruneisen;
+  m.rho0 = 2700;
+  m.c0 = 5350;
+  m.s = 1.34;
+  m.gamma0 = 2.0;
+  m.E = 69e9;
+  m.nu = 0.33;
+  m.cv = 880;
+  const kern::MieGruneisenEos eos = m.mie_gruneisen();
+  const double e = 6e5;  // [J/kg], about 980 K
+  const double rho_zp = eos.zero_pressure_density(e);
+  // the definition: zero pressure at (rho_zp, e), and below rho0 (tension branch)
+  CHECK(std::fabs(eos.pressure(rho_zp, e)) < 1e-6 * eos.C);
+  CHECK(rho_zp < 0.97 * m.rho0);  // 2587 kg/m^3: 4.2 % expansion
+  CHECK(eos.zero_pressure_density(0.0) == m.rho0);
+  CHECK(eos.zero_pressure_density(-1e5) == m.rho0);
+  Particles P;
+  P.resize(3);
+  Particles::enable(P.e, 3, true);
+  P.y = {1e-6, 2e-6, 3e-6};
+  P.body = {0, 0, 0};
+  for (std::size_t i = 0; i < 3; ++i) P.m[i] = 2.7e-9;  // m / rho0 = 1e-12 m^2
+  P.V = {1.2e-12, 1.2e-12, 1.01e-12};  // hot and fractured; cold and fractured; hot, thermally expanded, intact
+  P.e = {e, 0.0, e};
+  P.p = {0.0, 0.0, 0.0};
+  P.sxx = {0.0, 0.0, 1e6};  // the third carries a deviator: not fractured
+  const std::vector<Thermo> th{Thermo(m)};
+  const std::vector<Region> regions{{"band", 0.0, 5e-6, 0, 2e-6}};
+  const auto s = region_stats(P, regions, th, {m}, {0});
+  const double solid = 2.7e-9 / rho_zp + 1e-12 + 1.01e-12;
+  CHECK(s[0].open == Approx(1.0 - solid / 1e-11));
+}
+
 TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
   // a body moving at -1000 m/s, stopped below y = 412.5 um (rows of 5 um): the half-jump level is
   // crossed between the last stopped row centre and the first moving one
