@@ -5,7 +5,7 @@
 # figures/, a killed run's .tmp files) and keeps the user's own files; a write that fails (a
 # full disk, emulated by /dev/full) ends the run with exit 1 and run.json "failed" naming the
 # file and the errno text; so does a write that fails at the first snapshot, the XDMF index,
-# series.h5 or a checkpoint.
+# series.h5 or a checkpoint. Snapshots carry the velocity field of each point (`field`).
 #   tests/driver_outputs.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"
@@ -22,6 +22,13 @@ p = json.load(open(sys.argv[1]))["provenance"]
 for k in ("git_commit", "git_dirty", "compiler", "build_type", "cxx_flags", "date_utc", "host", "threads", "command_line"):
     assert k in p and p[k] != "", f"provenance lacks {k}: {p}"
 assert "--out" in p["command_line"] and "quickstart.toml" in p["command_line"], p["command_line"]
+PY
+# the snapshot names each point's velocity field (the quickstart's void faces use both)
+/usr/bin/python3 - "$TMP/a/fields/snap_00000000.h5" <<'PY' || { say "snapshot lacks a field dataset of 0s and 1s"; }
+import sys, h5py, numpy as np
+f = h5py.File(sys.argv[1], "r")["particles"]
+v = f["field"][:]
+assert v.shape == f["id"].shape and set(np.unique(v).tolist()) == {0.0, 1.0}, np.unique(v)
 PY
 cp "$TMP/a/run.json" "$TMP/run.json.first"
 
