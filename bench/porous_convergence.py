@@ -118,7 +118,9 @@ def open_split(outdir, run, region):
     V = m / band["density"]
     fr = (band["pressure"] == 0.0) & (band["stress_xx"] == 0.0) & (band["stress_yy"] == 0.0) & (band["stress_xy"] == 0.0)
     rho_zp = zero_pressure_density(run, band.get("energy"), rho0)
-    cap = m / (rho_zp[fr] if np.ndim(rho_zp) else rho_zp)
+    rz = np.broadcast_to(rho_zp, V.shape)[fr]
+    # no zero-pressure density (e past c0^2 / gamma0): the point holds all its V, as in the engine
+    cap = np.where(rz > 0.0, m / np.where(rz > 0.0, rz, 1.0), V[fr])
     excess = float(np.sum(V[fr] - np.minimum(V[fr], cap)))
     return 1.0 - float(V.sum()) / area, excess / area
 

@@ -87,7 +87,9 @@ static double solid_volume(const Particles& P, std::size_t i, const Material& ma
   const double rho_zp = mat.eos == EosKind::MieGruneisen && !P.e.empty()
                             ? mat.mie_gruneisen().zero_pressure_density(P.e[i])
                             : mat.rho0;
-  return std::min(P.V[i], P.m[i] / rho_zp);
+  // e past C / (Gamma rho0) (about 1.4e7 J/kg for Al) leaves the tension branch no zero-pressure
+  // density: such a point holds all its V
+  return rho_zp > 0.0 ? std::min(P.V[i], P.m[i] / rho_zp) : P.V[i];
 }
 
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,

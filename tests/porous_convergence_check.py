@@ -102,6 +102,12 @@ with tempfile.TemporaryDirectory() as d:
     check(abs(fr - (2e-12 - 1e-12 / 0.95) / 1e-10) < 1e-12, f"fractured expansion past m / rho_zp, got {fr}")
     g, fr = pc.open_split(d, run, "III")
     check(abs(fr - 0.01) < 1e-12, f"fractured expansion without the EOS keys 0.01, got {fr}")
+    # past e = c0^2 / gamma0 (4.5e6 J/kg here) no zero-pressure density: all of V is solid
+    snapshot(os.path.join(d, "fields", "snap_00000013.h5"), [1, 2, 5, 9, 12],
+             [1e9, 2e9, 0.0, 0.0, 0.0], [0, 0, 0, 0, 0], rho=[2700, 5400, 1350, 1350, 100],
+             sxy=[0.0, 0.0, 0.0, 1e6, 0.0], energy=[1e6, 1e6, 6e6, 1e6, 1e6])
+    g, fr = pc.open_split(d, mg, "III")
+    check(abs(fr) < 1e-15, f"fractured point past the tension branch's reach holds all its V, got {fr}")
 
 print("porous_convergence checks:", "FAILED " + "; ".join(fails) if fails else "all passed")
 sys.exit(1 if fails else 0)

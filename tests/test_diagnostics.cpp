@@ -140,6 +140,12 @@ TEST_CASE("open porosity: a hot fractured point holds its zero-pressure volume, 
   const auto s = region_stats(P, regions, th, {m}, {0});
   const double solid = 2.7e-9 / rho_zp + 1e-12 + 1.01e-12;
   CHECK(s[0].open == Approx(1.0 - solid / 1e-11));
+  // past e = C / (Gamma rho0) the tension branch has no zero-pressure density: all of V is solid
+  const double e_max = eos.C / eos.gamma_rho();
+  CHECK(eos.zero_pressure_density(1.5 * e_max) < 0.0);
+  P.e[0] = 1.5 * e_max;
+  const auto hot = region_stats(P, regions, th, {m}, {0});
+  CHECK(hot[0].open == Approx(1.0 - (1.2e-12 + 1e-12 + 1.01e-12) / 1e-11));
 }
 
 TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
