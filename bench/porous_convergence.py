@@ -59,8 +59,8 @@ def front_speed(outdir, window):
 
 def last_band(outdir, run, region):
     """The region's points in the last snapshot (fields/snap_*.h5, by name; the region by the points'
-    body and current y, bounds from run.json): a dict of arrays (density, pressure, stress_*), or
-    None without snapshots, h5py or the region."""
+    body and current y, bounds from run.json): a dict of arrays (density, pressure, stress_*, and
+    energy where the snapshot has it), or None without snapshots, h5py or the region."""
     snaps = sorted(glob.glob(os.path.join(outdir, "fields", "snap_*.h5")))
     reg = next((r for r in run.get("regions", []) if r["name"] == region), None)
     if not snaps or reg is None:
@@ -72,7 +72,7 @@ def last_band(outdir, run, region):
     with h5py.File(snaps[-1], "r") as f:
         y = f["particles/position"][:, 1] * 1e6  # m -> um
         sel = (f["particles/body"][:] == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
-        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy", "energy", "temperature"]
+        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy", "energy"]
         return {k: f["particles/" + k][:][sel] for k in names if "particles/" + k in f}
 
 
