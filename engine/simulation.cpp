@@ -58,8 +58,10 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   if (cfg_.strain_rate == StrainRate::Midstep && !can_mid)
     throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl' and an "
                                 "energy field (a Mie-Grueneisen material or heat conduction); use 'auto' or 'updated'");
-  const bool mid_default = cfg_.transfer == Transfer::APIC &&
-                           (cfg_.shape == kern::ShapeKind::Quadratic || cfg_.shape == kern::ShapeKind::Cubic);
+  // auto: mid-step energy except with the linear hat, whose cell crossings heat the dense shock
+  // state 13 % too hot with it (docs/accuracy.md; FLIP and uGIMP are exact with it since the
+  // kinematics take the updated L, session 19)
+  const bool mid_default = cfg_.shape != kern::ShapeKind::Linear;
   midstep_ = can_mid && (cfg_.strain_rate == StrainRate::Midstep || (cfg_.strain_rate == StrainRate::Auto && mid_default));
   // ids name particles in messages and snapshots: their order as given
   for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
@@ -280,14 +282,15 @@ void Simulation::gather_from_grid() {
   if (cfg_.walls.right != Wall::None) q.xmax = std::nextafter(g.x0 + g.length_x(), g.x0);
   if (cfg_.walls.bottom != Wall::None) q.ymin = g.y0;
   if (cfg_.walls.top != Wall::None) q.ymax = std::nextafter(g.y0 + g.length_y(), g.y0);
-  // L of each block in a per-thread buffer, unless asked to store it on the particles
+  // L of each block in a per-thread buffer (with the energy's mid-step rate), unless asked to
+  // store L on the particles
   const int threads = omp_get_max_threads();
-  if (!store_gradient_ && gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
+  if (gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
     gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
-  double* const L_buffer = store_gradient_ ? nullptr : gather_scratch_.data();
   const auto update = transfer::BlockUpdate::of(stress);
-  const kern::ConstitutiveResult r = kern::with_shape(
-      cfg_.shape, [&](auto shape) { return transfer::gather<decltype(shape)>(a, q, L_buffer, update); });
+  const kern::ConstitutiveResult r = kern::with_shape(cfg_.shape, [&](auto shape) {
+    return transfer::gather<decltype(shape)>(a, q, gather_scratch_.data(), store_gradient_, update);
+  });
   times_.constitutive += stress_seconds;
   times_.g2p += omp_get_wtime() - t_start - stress_seconds;
   if (store_gradient_) gradient_step_ = steps_ + 1;

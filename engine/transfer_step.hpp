@@ -49,8 +49,9 @@ template <class Shape>
 void scatter(const StepArgs& a);
 
 // G2P: USL's gather, or MUSL's velocity pass, momentum remap and position pass; the pass that
-// forms L calls `update` behind each block. L_buffer: see kern::g2p_blocks.
+// forms L calls `update` behind each block. scratch, store_L: see kern::g2p_blocks.
 template <class Shape>
-kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* L_buffer, BlockUpdate update);
+kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* scratch, bool store_L,
+                                 BlockUpdate update);
 
 }  // namespace smpm::transfer

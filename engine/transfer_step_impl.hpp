@@ -26,7 +26,8 @@ void scatter(const StepArgs& a) {
 }
 
 template <class S>
-kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* L_buffer, BlockUpdate update) {
+kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* scratch, bool store_L,
+                                 BlockUpdate update) {
   using kern::G2PWhat;
   using Result = kern::ConstitutiveResult;
   const auto& g = a.g;
@@ -40,8 +41,8 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
     // compile time for scenes that are not the study's
     auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
       constexpr int C = decltype(contact)::value;
-      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
-      return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, L_buffer, update);
+      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, scratch, store_L, update);
+      return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, scratch, store_L, update);
     };
     if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
     if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
@@ -63,7 +64,8 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
   kern::grid_velocity_from_momentum(g, a.box, G, gq);
   double* vel[] = {G.vx, G.vy};
   kern::fill_periodic_ghosts(g, a.box, vel, 2);
-  return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, L_buffer, update);
+  return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, scratch, store_L,
+                                                                                    update);
 }
 
 }  // namespace smpm::transfer
@@ -71,4 +73,4 @@ kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, dou
 // One shape's instantiation, inside namespace smpm::transfer: SMPM_TRANSFER_INSTANTIATE(kern::Linear).
 #define SMPM_TRANSFER_INSTANTIATE(SHAPE)        \
   template void scatter<SHAPE>(const StepArgs&); \
-  template kern::ConstitutiveResult gather<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, BlockUpdate);
+  template kern::ConstitutiveResult gather<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, bool, BlockUpdate);

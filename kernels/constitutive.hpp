@@ -224,6 +224,10 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   const double* __restrict Lxyp = L.xy;
   const double* __restrict Lyxp = L.yx;
   const double* __restrict Lyyp = L.yy;
+  // the mid-step rate of the energy's work (Midstep; kern::g2p_blocks' heating pass writes it)
+  const double* __restrict Wxxp = Midstep ? L.wxx : nullptr;
+  const double* __restrict Wyyp = Midstep ? L.wyy : nullptr;
+  const double* __restrict Wxyp = Midstep ? L.wxy : nullptr;
   const double* __restrict mp = P.m + first;
   const double* __restrict vxp = P.vx + first;
   const double* __restrict vyp = P.vy + first;
@@ -271,17 +275,20 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
     const double dV = V - V0;
     if constexpr (HasE) {
       // the work of the stress the scatter used (deviator, pressure and viscous pressure at the
-      // start of the step, volume V0) over the step's L: dt V0 sigma : D. It is exactly minus the
-      // work of the internal forces on the grid, dt f_i . v_i with the mid-step velocity the
-      // gather used for L (kern::g2p_particle): kinetic plus internal energy is conserved by the
-      // step. (The time-centred update this replaced, solved for P at mid-step, made the Hugoniot
+      // start of the step, volume V0) over the step's mid-step rate: dt V0 sigma : D_mid. It is
+      // exactly minus the work of the internal forces on the grid, dt f_i . v_i with the
+      // mid-step velocity the gather formed D_mid from (kern::g2p_particle): kinetic plus
+      // internal energy is conserved by the step. The volume, the deviator and the viscosity
+      // take the updated L (symplectic; with D_mid there too round-off grew without bound in thin
+      // ligaments, docs/method.md). (The time-centred update this replaced, solved for P at mid-step, made the Hugoniot
       // second order in dt but left the energy of the step unbalanced by O(dt^2) per node; at
       // partly filled nodes of void faces that was a 4-10 % loss over a porous run.) A point
       // that fractures takes the work of the stress it had, this same one.
       const double e_old = ep[p], cold = eos.cold(rho);
       if constexpr (Midstep) {
         const double q0 = HasQ ? qp[p] : 0.0;
-        const double sD = a0 * lxx + b0 * lyy + 2.0 * c0 * dxy - (P0 + q0) * trD;
+        const double mxx = Wxxp[p], myy = Wyyp[p], mxy = Wxyp[p];
+        const double sD = a0 * mxx + b0 * myy + 2.0 * c0 * mxy - (P0 + q0) * (mxx + myy);
         e = e_old + dt * V0 * sD / m;
       } else {
       // updated-velocity L (q.midstep false): deviatoric work with the time-centred stress and

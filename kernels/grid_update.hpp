@@ -69,7 +69,7 @@ struct ContactParams {
   // contact and plough: a block sliding at 1 m/s on a frictionless floor lost 17 % of its speed
   // at 0.9 and was kicked up; at 1 nothing (docs/verification.md).
   double volume_fraction = 1.0;
-  bool midstep = false;  // the gather's L takes the mid-step velocity (kern::G2PParams::mid)
+  bool midstep = false;  // the energy's work takes the mid-step velocity (kern::G2PParams::mid)
 };
 // row_loss (sy() entries, or null): the energy contact removed, summed per storage row.
 void grid_contact(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,

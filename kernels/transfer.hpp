@@ -278,18 +278,20 @@ struct G2PParams {
 };
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
-// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T,
-// in the USL pass with transfer heating (Full, Heat) and q.mid = 0.5 from the node's mid-step
-// velocity v_i = (v_i^old + v_i^new) / 2 (px, py hold v^old, the grid update's scatter_velocity). The grid's kinetic energy changes by exactly dt f_i . (v^old + v^new) / 2
-// in the explicit update, and the constitutive update's work dt V sigma : D with the stress that
-// made f_i (kern::constitutive_range, mid-step energy) is then exactly its negative: the step
-// conserves energy node by node, partly filled nodes at void faces and free surfaces included
-// (with L from v^new the step loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small).
-// The mid-step strain rate with forces from the old stress is not symplectic: an undamped mode
-// of frequency w grows by about (w dt)^2 / 2 per step. APIC's transfers damp grid-scale modes
-// and shock runs carry viscosity; elastic runs (no energy field) take the updated velocity (the
-// FLIP disks and the linear-hat bar of test_elastic blew up with the mid-step one;
-// docs/method.md). FLIP with an energy field takes v^old = v^new - dv.
+// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T
+// from the updated velocity. WorkRate (the USL pass with transfer heating, g2p_blocks): also
+// the rate of the energy's work, D_mid = sym sum_i v_i^mid grad w_i^T with v_i^mid = v_i^new -
+// q.mid (v_i^new - v_i^old) (px, py hold v^old, the grid update's scatter_velocity; FLIP takes
+// v^old = v^new - dv), into Lout.wxx, wyy, wxy. The grid's kinetic energy changes by exactly dt
+// f_i . (v^old + v^new) / 2 in the explicit update, and with q.mid = 0.5 the constitutive
+// update's work dt V sigma : D_mid with the stress that made f_i (kern::constitutive_range,
+// mid-step energy) is exactly its negative: the step conserves energy node by node, partly
+// filled nodes at void faces and free surfaces included (with the work over L from v^new it
+// loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small). The kinematics (volume,
+// deviator, viscosity) take L from v^new, the symplectic choice: with the mid-step rate there
+// too an undamped mode of frequency w grew by about (w dt)^2 / 4 per step in amplitude, and in
+// a porous body moving freely at 1000 m/s round-off grew to 0.5 GPa in 120 ns in its thin
+// ligaments (docs/method.md, "The mid-step instability").
 //
 // Heat (APIC; FLIP below): both transfers dissipate kinetic energy, and both losses split exactly
 // into per-particle shares (the kinetic energy of a particle counts its affine field,
@@ -308,7 +310,8 @@ struct G2PParams {
 //
 // PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
 // the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
-template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0, bool PureFlip = false>
+template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0, bool PureFlip = false,
+          bool WorkRate = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
                          const G2PParams& q, const Gradient& Lout, std::size_t li) {
   static_assert(!PureFlip || (FLIP && What == G2PWhat::Velocity), "PureFlip is the FLIP velocity pass");
@@ -322,10 +325,11 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
-  // USL with transfer heating (APIC with an energy field, which reads px anyway): L may take the
-  // mid-step velocity (q.mid); other passes and transfers form L from the updated velocity
-  constexpr bool kMid = What == G2PWhat::Full && Heat;
-  double axx = 0, axy = 0, ayx = 0, ayy = 0;   // sum v_new grad w^T (APIC C of the linear hat)
+  // USL with transfer heating (g2p_blocks): also the rate of the energy's work, D_mid from the
+  // mid-step velocity (q.mid) into Lout.wxx...; L is from the updated velocity in every pass
+  constexpr bool kMid = WorkRate;
+  static_assert(!WorkRate || (What == G2PWhat::Full && Heat), "the work rate is the heating USL pass's");
+  double mxx = 0, mxy = 0, myx = 0, myy = 0;   // sum v_mid grad w^T
   static_assert(!Heat || kAffine || (FLIP && What == G2PWhat::Full),
                 "transfer heating is defined for the APIC velocity gather and the FLIP USL gather");
   double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
@@ -384,11 +388,11 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       }
       if constexpr (kGrad) {
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
-        lxx += lvx * gx; lxy += lvx * gy;
-        lyx += lvy * gx; lyy += lvy * gy;
-        if constexpr (kMid && kAffine && Shape::apic_gradient) {
-          axx += gvx * gx; axy += gvx * gy;
-          ayx += gvy * gx; ayy += gvy * gy;
+        lxx += gvx * gx; lxy += gvx * gy;
+        lyx += gvy * gx; lyy += gvy * gy;
+        if constexpr (kMid) {
+          mxx += lvx * gx; mxy += lvx * gy;
+          myx += lvy * gx; myy += lvy * gy;
         }
       }
       if constexpr (kAffine && !Shape::apic_gradient) {
@@ -412,9 +416,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       }
     }
     double cxx, cxy, cyx, cyy;  // C in grid units
-    if constexpr (Shape::apic_gradient && kMid) {
-      cxx = axx; cxy = axy; cyx = ayx; cyy = ayy;
-    } else if constexpr (Shape::apic_gradient) {
+    if constexpr (Shape::apic_gradient) {
       cxx = lxx; cxy = lxy; cyx = lyx; cyy = lyy;
     } else {
       cxx = bxx / Dx; cxy = bxy / Dy; cyx = byx / Dx; cyy = byy / Dy;
@@ -475,6 +477,10 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     }
     Lout.xx[li] = lxx * inv_h; Lout.xy[li] = lxy * inv_h;
     Lout.yx[li] = lyx * inv_h; Lout.yy[li] = lyy * inv_h;
+    if constexpr (kMid) {
+      Lout.wxx[li] = mxx * inv_h; Lout.wyy[li] = myy * inv_h;
+      Lout.wxy[li] = 0.5 * (mxy + myx) * inv_h;
+    }
   }
 }
 
@@ -516,22 +522,25 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 // block by block right behind it: each thread gathers its share of the points (thread_share) in
 // blocks of kGatherBlock points and, after each block, calls after(first, last, L, acc) on it
 // while the block's L is in cache (the engine's constitutive update; L.xx[i] ... is the
-// gradient of point first + i). With scratch null, L goes to the particles' arrays as with g2p;
-// else to thread t's buffer at scratch + t * kGatherScratch (4 x kGatherBlock doubles, 256 KiB,
-// in L2), and the particles' L arrays are left as they were: the 64 B per point of storing L
-// (write and write-allocate) and the 32 B of reading it back are saved. Acc: the per-thread
+// gradient of point first + i). Thread t's buffer is at scratch + t * kGatherScratch (7 x
+// kGatherBlock doubles, 448 KiB, in L2): with store_L, L goes to the particles' arrays as with
+// g2p; else to the buffer's first four blocks, and the particles' L arrays are left as they
+// were: the 64 B per point of storing L (write and write-allocate) and the 32 B of reading it
+// back are saved. The heating USL pass's work rate D_mid (L.wxx, wyy, wxy) is always in the
+// last three blocks. Acc: the per-thread
 // result of `after`, merged with Acc::merge (whose order must not matter). The gathered values
 // are those of g2p, bitwise (the same particle body; tests/test_kernels.cpp). The block size:
 // blocks of 256-2048 points made the gather 2-6 ns per point slower on one thread (each block
 // restarts the prefetch streams of both loops, about 20 arrays); 4096-16384 measured alike
 // (docs/performance.md, "What was tried").
 inline constexpr std::size_t kGatherBlock = 8192;
-inline constexpr std::size_t kGatherScratch = 4 * kGatherBlock;  // doubles per thread
+inline constexpr std::size_t kGatherScratch = 7 * kGatherBlock;  // doubles per thread
 
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Acc, class After>
 Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
-               double* scratch, After&& after) {
+               double* scratch, bool store_L, After&& after) {
   static_assert(What != G2PWhat::Velocity, "the velocity pass forms no L");
+  constexpr bool kWork = What == G2PWhat::Full && Heat;
   Acc total{};
 #pragma omp parallel
   {
@@ -539,16 +548,21 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
     const GridView Gl = G;
     const ParticleView Pl = P;
     const G2PParams ql = q;
-    double* const buf = scratch ? scratch + kGatherScratch * static_cast<std::size_t>(omp_get_thread_num()) : nullptr;
+    double* const buf = scratch + kGatherScratch * static_cast<std::size_t>(omp_get_thread_num());
     const auto [begin, end] = thread_share(n);
     Acc own{};
     for (std::size_t first = begin; first < end; first += kGatherBlock) {
       const std::size_t last = std::min(first + kGatherBlock, end);
-      const Gradient L = buf ? Gradient{buf, buf + kGatherBlock, buf + 2 * kGatherBlock, buf + 3 * kGatherBlock}
-                             : Gradient::of(Pl) + first;
+      Gradient L = store_L ? Gradient::of(Pl) + first
+                           : Gradient{buf, buf + kGatherBlock, buf + 2 * kGatherBlock, buf + 3 * kGatherBlock};
+      if (kWork) {
+        L.wxx = buf + 4 * kGatherBlock;
+        L.wyy = buf + 5 * kGatherBlock;
+        L.wxy = buf + 6 * kGatherBlock;
+      }
 #pragma omp simd
       for (std::size_t p = first; p < last; ++p)
-        g2p_particle<Shape, FLIP, What, Heat, Contact>(gl, Gl, Pl, p, ql, L, p - first);
+        g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
       after(first, last, L, own);
     }
 #pragma omp critical(smpm_g2p_blocks)

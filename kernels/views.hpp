@@ -117,10 +117,18 @@ inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
 // Where the last gather pass stores the velocity gradient L [1/s] and the constitutive update
 // reads it: the particles' own arrays (ParticleView::Lxx...), or a block buffer of
 // kern::g2p_blocks that holds it for one block of points (element 0 = the block's first point).
+// With the mid-step energy (kern::g2p_blocks' heating USL pass, q.mid = 0.5) it also carries the
+// symmetric mid-step rate D_mid (wxx, wyy, wxy: sym of sum_i (v_i^old + v_i^new) / 2 grad w_i^T),
+// whose work with the old stress is the energy increment (kern::constitutive_range); L itself is
+// always the updated one. Null where no pass writes it.
 struct Gradient {
   double* xx; double* xy; double* yx; double* yy;
+  double* wxx = nullptr; double* wyy = nullptr; double* wxy = nullptr;
   static Gradient of(const ParticleView& P) { return {P.Lxx, P.Lxy, P.Lyx, P.Lyy}; }
-  Gradient operator+(std::size_t k) const { return {xx + k, xy + k, yx + k, yy + k}; }
+  Gradient operator+(std::size_t k) const {
+    const auto off = [k](double* a) { return a ? a + k : nullptr; };
+    return {xx + k, xy + k, yx + k, yy + k, off(wxx), off(wyy), off(wxy)};
+  }
 };
 
 }  // namespace smpm::kern

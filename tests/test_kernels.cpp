@@ -566,7 +566,7 @@ void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
       };
       std::vector<double> scratch(kGatherScratch * static_cast<std::size_t>(threads), std::nan(""));
       const auto r = g2p_blocks<S, false, What, false, false, ConstitutiveResult>(g, G, fv, F.size(), gq,
-                                                                                 store ? nullptr : scratch.data(), after);
+                                                                                 scratch.data(), store, after);
       REQUIRE(r.bad == ref.bad);
       REQUIRE(r.max_speed == ref.max_speed);
       for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::V, &Particles::sxx,
