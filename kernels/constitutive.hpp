@@ -279,11 +279,12 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
       // exactly minus the work of the internal forces on the grid, dt f_i . v_i with the
       // mid-step velocity the gather formed D_mid from (kern::g2p_particle): kinetic plus
       // internal energy is conserved by the step. The volume, the deviator and the viscosity
-      // take the updated L (symplectic; with D_mid there too round-off grew without bound in thin
-      // ligaments, docs/method.md). (The time-centred update this replaced, solved for P at mid-step, made the Hugoniot
-      // second order in dt but left the energy of the step unbalanced by O(dt^2) per node; at
-      // partly filled nodes of void faces that was a 4-10 % loss over a porous run.) A point
-      // that fractures takes the work of the stress it had, this same one.
+      // take the updated L (symplectic; with D_mid there too round-off grew without bound in
+      // thin ligaments, docs/method.md). (The time-centred update this replaced, solved for P at
+      // mid-step, made the Hugoniot second order in dt but left the energy of the step
+      // unbalanced by O(dt^2) per node; at partly filled nodes of void faces that was a 4-10 %
+      // loss over a porous run.) A point that fractures takes the work of the stress it had,
+      // this same one.
       const double e_old = ep[p], cold = eos.cold(rho);
       if constexpr (Midstep) {
         const double q0 = HasQ ? qp[p] : 0.0;
@@ -352,6 +353,7 @@ ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveS
     auto mid = [&](auto W) {
       constexpr bool w_ = decltype(W)::value;
       if constexpr (e_) {
+        // q.midstep reads L.wxx, wyy, wxy: only kern::g2p_blocks' heating USL pass writes them
         if (q.midstep) return constitutive_range<s_, e_, q_, w_, true>(P, S, L, first, last, q, eos, str, sel);
       }
       return constitutive_range<s_, e_, q_, w_, false>(P, S, L, first, last, q, eos, str, sel);

@@ -327,7 +327,6 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
   // USL with transfer heating (g2p_blocks): also the rate of the energy's work, D_mid from the
   // mid-step velocity (q.mid) into Lout.wxx...; L is from the updated velocity in every pass
-  constexpr bool kMid = WorkRate;
   static_assert(!WorkRate || (What == G2PWhat::Full && Heat), "the work rate is the heating USL pass's");
   double mxx = 0, mxy = 0, myx = 0, myy = 0;   // sum v_mid grad w^T
   static_assert(!Heat || kAffine || (FLIP && What == G2PWhat::Full),
@@ -357,10 +356,10 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
       // USL: L from the mid-step velocity (v_old + v_new) / 2 of the node, v_old the scatter's
       // velocity after the walls (see the comment above)
       double lvx = gvx, lvy = gvy;
-      if constexpr (kMid && FLIP) {  // FLIP: v_old = v_new - dv (the grid update's increment)
+      if constexpr (WorkRate && FLIP) {  // FLIP: v_old = v_new - dv (the grid update's increment)
         lvx = gvx - q.mid * G.dvx[n];
         lvy = gvy - q.mid * G.dvy[n];
-      } else if constexpr (kMid) {
+      } else if constexpr (WorkRate) {
         lvx = gvx - q.mid * (gvx - G.px[n]);
         lvy = gvy - q.mid * (gvy - G.py[n]);
       }
@@ -390,7 +389,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
         const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
         lxx += gvx * gx; lxy += gvx * gy;
         lyx += gvy * gx; lyy += gvy * gy;
-        if constexpr (kMid) {
+        if constexpr (WorkRate) {
           mxx += lvx * gx; mxy += lvx * gy;
           myx += lvy * gx; myy += lvy * gy;
         }
@@ -477,7 +476,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     }
     Lout.xx[li] = lxx * inv_h; Lout.xy[li] = lxy * inv_h;
     Lout.yx[li] = lyx * inv_h; Lout.yy[li] = lyy * inv_h;
-    if constexpr (kMid) {
+    if constexpr (WorkRate) {
       Lout.wxx[li] = mxx * inv_h; Lout.wyy[li] = myy * inv_h;
       Lout.wxy[li] = 0.5 * (mxy + myx) * inv_h;
     }
@@ -540,6 +539,9 @@ template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Ac
 Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
                double* scratch, bool store_L, After&& after) {
   static_assert(What != G2PWhat::Velocity, "the velocity pass forms no L");
+  // the heating USL pass always forms D_mid: with q.mid = 0 (the updated rate: the linear hat, or
+  // strain_rate = "updated") it equals sym L and goes unread, which spares those scenes a second
+  // instantiation of every gather (compile time) for 3 stores per point
   constexpr bool kWork = What == G2PWhat::Full && Heat;
   Acc total{};
 #pragma omp parallel
@@ -555,7 +557,7 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
       const std::size_t last = std::min(first + kGatherBlock, end);
       Gradient L = store_L ? Gradient::of(Pl) + first
                            : Gradient{buf, buf + kGatherBlock, buf + 2 * kGatherBlock, buf + 3 * kGatherBlock};
-      if (kWork) {
+      if constexpr (kWork) {
         L.wxx = buf + 4 * kGatherBlock;
         L.wyy = buf + 5 * kGatherBlock;
         L.wxy = buf + 6 * kGatherBlock;

@@ -479,8 +479,8 @@ namespace {
 // A scene without an energy field runs the heating gather too, heating a scratch array
 // (Simulation::transfer_args): its velocities, positions, L and C must be the plain gather's.
 // USL's pass (APIC and FLIP, Full) and MUSL's APIC velocity pass, the grid updated as for such a
-// scene (no scatter velocity in px, L from the updated velocity: mid = 0). std::vector's ==
-// compares doubles with ==, so a zero's sign may differ (L's mid-step term is 0 * (v_new - v_old)).
+// scene (no scatter velocity in px, mid = 0). std::vector's == compares doubles with ==, so a
+// zero's sign may differ.
 template <class S, bool FLIP, G2PWhat What>
 void check_heat_sink() {
   const GridGeom g = make_geom(false);
