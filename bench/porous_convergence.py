@@ -25,9 +25,11 @@ and, with three or more cell sizes, the Richardson limit of the front speed from
 compacted Rankine-Hugoniot front from run.json (compacted_hugoniot).
 
   /usr/bin/python3 bench/porous_convergence.py [--h 4,2,1] [--set KEY=VALUE ...] [--out DIR]
-      [--case FILE] [--region III] [--window 100,190] [--driver build/shockmpm] [--reuse]
+      [--case FILE] [--region III] [--window 100,190] [--driver build/shockmpm] [--reuse] [--check]
 
---reuse tabulates existing outputs in DIR without running. Output: a markdown table on stdout.
+--reuse tabulates existing outputs in DIR without running. --check exits 1 unless the first
+(coarsest) run meets issue 14's single-run figures (open porosity under 2 %, zero-P share under
+5 %, front within 5 % of the compacted Hugoniot, energy within 1e-8; ctest strip_closure). Output: a markdown table on stdout.
 Figures in docs/verification.md ("Porous strip") come from this script.
 """
 import argparse
@@ -189,6 +191,10 @@ def main():
     ap.add_argument("--window", default="100,190", help="front fit window [ns]")
     ap.add_argument("--driver", default=os.path.join(root, "build/shockmpm"))
     ap.add_argument("--reuse", action="store_true", help="tabulate existing outputs, run nothing")
+    ap.add_argument("--check", action="store_true",
+                    help="exit 1 unless the first (coarsest) run meets issue 14's figures that one run shows: "
+                         "open porosity under 2 %%, under 5 %% of the band at zero pressure, front within 5 %% "
+                         "of the fully compacted Rankine-Hugoniot front, energy within 1e-8")
     a = ap.parse_args()
     hs = [float(x) for x in a.h.split(",")]
     window = [float(x) for x in a.window.split(",")]
@@ -229,6 +235,17 @@ def main():
         print(f"| {r['h_um']:g} | {r['front']:.0f} | {vl:+.1f} % | {vr:+.1f} % | {r['P']:.2f} | {r['rho']:.3f} / {r['bulk']:.3f} "
               f"| {r['open'] * 100:.1f} % ({r['split'][0] * 100:.1f} + {r['split'][1] * 100:.1f}) | {r['R2']:.1f} / {r['D2']:.1f} | {r['zeroP'] * 100:.1f} % | {r['energy'] * 100:+.2g} % "
               f"| {r['particle_steps']:.3g} | {r['wall_s']:.1f} |")
+    if a.check:
+        r = rows[0]
+        checks = [("open porosity", r["open"], r["open"] < 0.02, "< 0.02"),
+                  ("zero-pressure share", r["zeroP"], r["zeroP"] < 0.05, "< 0.05"),
+                  ("front / compacted Hugoniot front - 1", r["front"] / rh - 1, abs(r["front"] / rh - 1) < 0.05, "within 0.05"),
+                  ("energy change", r["energy"], abs(r["energy"]) < 1e-8, "within 1e-8")]
+        bad = [c for c in checks if not c[2]]
+        for name, v, ok, bound in checks:
+            print(f"check h = {r['h_um']:g} um: {name} {v:.4g} ({bound}): {'ok' if ok else 'FAILED'}")
+        if bad:
+            sys.exit(1)
 
 
 if __name__ == "__main__":

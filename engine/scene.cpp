@@ -211,6 +211,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.solver.av_linear = r.number("viscosity_linear", 0.0, 10.0, 0.06);
     s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
     s.solver.heat_conduction = r.boolean("heat_conduction", false);
+    s.solver.crack_closure = r.boolean("crack_closure", true);
     const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
     s.solver.gravity_x = gx;
     s.solver.gravity_y = gy;
@@ -256,8 +257,9 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.solver.void_faces = VoidFaces::Separate;
       s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
       void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
+      s.solver.void_face_merge = r.boolean("void_face_merge", true);
     } else {
-      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells"})
+      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells", "void_face_merge"})
         if (r.has(k))
           throw CaseError(std::string("case key 'contact.") + k + "' applies with contact.void_faces = \"separate\" only; "
                           "this case has \"single_field\"" + (can ? "" : " (the default here: no voids, two-body contact or MUSL)"));

@@ -14,6 +14,7 @@
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
+#include "kernels/void_closure.hpp"
 
 namespace smpm {
 
@@ -132,11 +133,48 @@ void Simulation::step(double dt_max) {
   gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap); the
                         // last pass updates volume, stress, pressure, energy block by block
                         // behind it; signal speed for the next dt
+  merge_closed_faces();  // two void-face fields: a point whose nodes are all full, one welded, joins field 0
+  close_cracks();        // a fractured point among compressed cell-mates: its group shares one density
   if (cfg_.heat_conduction) conduct_heat();  // grid conduction, heat back to the particles
   time_ += dt_;
   last_dt_ = dt_;
   ++steps_;
   box_nodes_ += double(box_.nodes());
+}
+
+// kern::merge_closed_faces over the grid of this step's scatter (docs/method.md, "Closed voids").
+void Simulation::merge_closed_faces() {
+  if (cfg_.void_faces != VoidFaces::Separate || !cfg_.void_face_merge) return;
+  Timed t(times_.contact);
+  const kern::MergeParams q{cfg_.void_face_volume_fraction, mass_eps_, cfg_.ugimp_lp};
+  kern::with_shape(cfg_.shape, [&](auto shape) {
+    kern::merge_closed_faces<decltype(shape)>(grid_.geom, grid_.view(), P_.x.data(), P_.y.data(), P_.field.data(),
+                                              P_.size(), q);
+  });
+}
+
+// kern::close_cracks for every material with a tension cutoff, over the cells of this step's
+// binning (docs/method.md, "Closed voids"); the next step's signal speed takes the points it sets.
+void Simulation::close_cracks() {
+  if (!cfg_.crack_closure) return;
+  Timed t(times_.constitutive);
+  const auto opt = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const Material& mat = materials_[k];
+    if (!(mat.spall_strength > 0.0)) continue;
+    const kern::CrackArrays A{P_.m.data(), P_.V.data(), P_.p.data(), P_.sxx.data(), P_.syy.data(), P_.sxy.data(),
+                              opt(P_.q), opt(P_.e), P_.vx.data(), P_.vy.data(), P_.body.data(),
+                              P_.field.empty() ? nullptr : P_.field.data(),
+                              materials_.size() > 1 ? select_[k].data() : nullptr};
+    const kern::CrackParams prm{-mat.spall_strength, 0.5 * mat.rho0};  // as stress_pass's cutoff
+    with_material(mat, [&](const auto& eos, const auto& str) {
+      const auto r = kern::close_cracks(A, order_.data(), cell_start_.data(), grid_.geom.num_keys(), prm, eos,
+                                        [&](double rho, double P, double vx, double vy) {
+                                          return kern::signal_speed(eos, str, rho, P, vx, vy);
+                                        });
+      max_speed_ = std::max(max_speed_, r.max_speed);
+    });
+  }
 }
 
 void Simulation::bin_particles() {

@@ -64,6 +64,12 @@ struct SolverConfig {
   double contact_volume_fraction = 1.0;  // nodal volume (in cells) needed for contact
   VoidFaces void_faces = VoidFaces::SingleField;
   double void_face_volume_fraction = 0.9;  // nodal volume (in cells) at which the faces weld (docs/method.md)
+  // a void-face point whose nodes are all full, one of them welded, joins field 0 for good
+  // (kern::merge_closed_faces): closed voids leave no laminated layers that slide into each other
+  bool void_face_merge = true;
+  // a fractured point among compressed points of its cell, body and field: the group shares one
+  // density (kern::close_cracks), so cracks inside compacted material close
+  bool crack_closure = true;
   int fields() const { return contact || void_faces == VoidFaces::Separate ? 2 : 1; }
 };
 
@@ -152,6 +158,8 @@ class Simulation {
   void scatter_to_grid();
   void update_grid();
   void gather_from_grid();
+  void merge_closed_faces();
+  void close_cracks();
   // the constitutive update of a block of points, which the last gather pass calls (its L)
   auto stress_pass(double& thread0_seconds);
   void conduct_heat();

@@ -282,6 +282,14 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
   CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_volume_fraction=0.9"}),
                     Catch::Contains("applies with contact.void_faces = \"separate\" only"));
   CHECK_THROWS_WITH(build({"contact.void_faces=\"separte\""}), Catch::Contains("'separate', 'single_field'"));
+  // the closed-void passes (docs/method.md, "Closed voids"): on by default, off by key
+  CHECK(build({}).solver.void_face_merge);
+  CHECK(build({}).solver.crack_closure);
+  CHECK_FALSE(build({"contact.void_face_merge=false"}).solver.void_face_merge);
+  CHECK_FALSE(build({"solver.crack_closure=false"}).solver.crack_closure);
+  CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_merge=true"}),
+                    Catch::Contains("'contact.void_face_merge' applies with contact.void_faces = \"separate\" only"));
+  CHECK_THROWS_WITH(build({"solver.crack_closure=1"}), Catch::Contains("crack_closure"));
   CHECK_THROWS_WITH(build({"contact.void_face_volume_fraction=3"}), Catch::Contains("allowed 0.1 to 2"));
   CHECK_THROWS_WITH(build({"solver.scheme=\"musl\"", "contact.void_faces=\"separate\""}),
                     Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));

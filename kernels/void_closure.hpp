@@ -1,0 +1,182 @@
+// What happens to a void after its faces have met (issue 14): two passes at the end of a step.
+//
+// merge_closed_faces: the two faces of a void lie in two velocity fields (engine/porous.cpp,
+// assign_void_sides) so that a gap narrower than a cell can keep closing; where the fields
+// together fill a node they are welded (kern::grid_contact). Once a void has closed the fields
+// have no reason to stay apart, but they did: the compacted material was left laminated, thin
+// layers of the two fields one over the other, and wherever a disturbance later dipped a node's
+// fill under the weld's threshold the layers moved apart independently and slid into each other.
+// The points then overlapped (1.8 / 2.5 % of the strip's band at h = 2 / 1 um) and the
+// compaction front converged about 3 % slow. Now a field-1 point whose every node (every node
+// its shape function weighs) is filled to the weld's threshold by the two fields together, one
+// of them holding both fields (welded), has its void closed around it: it joins field 0 for good.
+// A point next to an open gap has an unfilled node and stays.
+//
+// close_cracks: a point that spalled while its void collapsed (tension past the cutoff: zero
+// stress, expanded) can end up inside compacted material, at zero pressure among cell-mates
+// that carry the shock's. The grid's velocity field is smooth over a cell, so it cannot compress
+// one point of a cell apart from the others: the point's excess volume is a sub-cell volume mode
+// the grid does not see, and it stayed open for good (13 % of the strip's compacted points at
+// zero pressure at h = 4 um; the mean pressure 3-8 % low). Now, within a cell, where a group of
+// points (one body and one velocity field) holds both a fractured point (its EOS pressure below
+// the cutoff) and a compressed one (P > 0), every point of the group takes the group's density
+// (its mass over its volume) and the pressure of the EOS at that density and its unchanged
+// energy; a point still in tension past the cutoff stays fractured. The volume moves within the
+// group only (the group's volume is conserved) and no energy changes: the exchange does no work,
+// as a crack that closes at zero stress does none. A group without a fractured point, or
+// without a compressed one (a spall plane in tension), is untouched. (The cell-averaged volume
+// of F-bar / "J-bar" methods against volumetric locking, applied only where a crack closes:
+// over every cell it kept the points of a weld overlapping, session 20.)
+#pragma once
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+
+#include "views.hpp"
+
+namespace smpm::kern {
+
+// ---- merge_closed_faces ----------------------------------------------------------------------
+
+struct MergeParams {
+  double fill = 0.9;     // node volume (sum of both fields' sum_p w V_p) in cells at which a node is full
+  double mass_eps = 0.0; // a field with at most this mass at a node is absent there
+  double lp = 0.25;      // uGIMP half width in cells (Shape::eval)
+};
+
+// Points [0, n): field[p] 1 -> 0 where its nodes are all full and one is welded. The grid holds
+// this step's scatter (per field: m, vol; field 1 at offset G.fstride). Each point is decided
+// on its own from the grid: race-free and the same for any thread count. Returns the number
+// of points merged.
+template <class Shape>
+std::size_t merge_closed_faces(const GridGeom& g, const GridView& G, const double* x, const double* y,
+                               std::uint8_t* field, std::size_t n, const MergeParams& q) {
+  const std::size_t fs = G.fstride;
+  const double full = q.fill * g.h * g.h;
+  std::size_t merged = 0;
+  const long cnt = static_cast<long>(n);
+#pragma omp parallel for schedule(static) reduction(+ : merged)
+  for (long p = 0; p < cnt; ++p) {
+    if (field[p] != 1) continue;
+    double wx[Shape::N], dwx[Shape::N], wy[Shape::N], dwy[Shape::N];
+    const int bx = Shape::eval((x[p] - g.x0) / g.h, q.lp, wx, dwx);
+    const int by = Shape::eval((y[p] - g.y0) / g.h, q.lp, wy, dwy);
+    bool all_full = true, welded = false;
+    for (int b = 0; b < Shape::N && all_full; ++b) {
+      if (wy[b] == 0.0) continue;
+      for (int a = 0; a < Shape::N; ++a) {
+        if (wx[a] == 0.0) continue;
+        int i = bx + a;
+        if (g.periodic_x) i = ((i % g.nx) + g.nx) % g.nx;  // the scatter folded the ghosts onto these
+        const std::size_t k = g.node(i, by + b);
+        if (G.vol[k] + G.vol[k + fs] < full) {
+          all_full = false;
+          break;
+        }
+        welded |= (G.m[k] > q.mass_eps) & (G.m[k + fs] > q.mass_eps);
+      }
+    }
+    if (all_full && welded) {
+      field[p] = 0;
+      ++merged;
+    }
+  }
+  return merged;
+}
+
+// ---- close_cracks ----------------------------------------------------------------------------
+
+struct CrackArrays {
+  const double* m;
+  double* V;
+  double* p;
+  double* sxx;
+  double* syy;
+  double* sxy;
+  double* q;          // artificial viscous pressure, or null
+  const double* e;    // specific internal energy, or null (an EOS without energy)
+  const double* vx;
+  const double* vy;
+  const std::uint8_t* body;
+  const std::uint8_t* field;   // velocity field per point, or null (one field)
+  const std::uint8_t* select;  // per body: whether this material's call handles it; null: all
+};
+
+struct CrackParams {
+  double p_min = -1e300;  // tension cutoff [Pa]: a point whose EOS pressure is below it is fractured
+  double rho_min = 0.0;   // debris below this density [kg/m^3]: neither counted nor changed
+};
+
+struct CrackResult {
+  double max_speed = 0.0;   // signal speed of the points set intact [m/s], for the next dt
+  std::size_t changed = 0;  // points whose volume was set
+};
+
+// The points of cell k are order[cell_start[k] .. cell_start[k + 1]). Cells run in parallel
+// (a point is in one cell: race-free; a group's sums go in sorted order, so the result is the
+// same for any thread count). P = eos.cold(rho) + eos.gamma_rho() e; speed(rho, P, vx, vy) the
+// signal speed of an intact point.
+template <class Eos, class Speed>
+CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const std::uint32_t* cell_start,
+                         std::size_t num_keys, const CrackParams& prm, const Eos& eos, Speed&& speed) {
+  constexpr int kGroups = 8;  // (body, field) pairs in one cell; more are left alone
+  const double gr = eos.gamma_rho();
+  const auto energy = [&](std::uint32_t i) { return A.e ? A.e[i] : 0.0; };
+  const auto tag_of = [&](std::uint32_t i) { return A.body[i] * 2 + (A.field ? A.field[i] : 0); };
+  const auto counted = [&](std::uint32_t i) {
+    return (!A.select || A.select[A.body[i]]) && !(A.m[i] < prm.rho_min * A.V[i]);  // debris
+  };
+  double vmax = 0.0;
+  std::size_t changed = 0;
+  const long nk = static_cast<long>(num_keys);
+#pragma omp parallel for schedule(static) reduction(max : vmax) reduction(+ : changed)
+  for (long k = 0; k < nk; ++k) {
+    const std::uint32_t s0 = cell_start[k], s1 = cell_start[k + 1];
+    if (s1 - s0 < 2) continue;
+    int tag[kGroups], nfr[kGroups], ncomp[kGroups];
+    double sm[kGroups], sv[kGroups];
+    int ng = 0;
+    bool any = false;
+    for (std::uint32_t s = s0; s < s1; ++s) {
+      const std::uint32_t i = order[s];
+      if (!counted(i)) continue;
+      const int t = tag_of(i);
+      int g = 0;
+      while (g < ng && tag[g] != t) ++g;
+      if (g == ng) {
+        if (ng == kGroups) continue;
+        tag[g] = t, sm[g] = sv[g] = 0.0, nfr[g] = ncomp[g] = 0, ++ng;
+      }
+      sm[g] += A.m[i];
+      sv[g] += A.V[i];
+      const bool fr = eos.cold(A.m[i] / A.V[i]) + gr * energy(i) < prm.p_min;
+      nfr[g] += fr;
+      ncomp[g] += A.p[i] > 0.0;
+      any |= fr;
+    }
+    if (!any) continue;
+    for (int g = 0; g < ng; ++g) {
+      if (nfr[g] == 0 || ncomp[g] == 0) continue;
+      const double rho = sm[g] / sv[g];
+      const double cold = eos.cold(rho);
+      for (std::uint32_t s = s0; s < s1; ++s) {
+        const std::uint32_t i = order[s];
+        if (!counted(i) || tag_of(i) != tag[g]) continue;
+        A.V[i] = A.m[i] / rho;
+        const double P = cold + gr * energy(i);
+        const bool fr = P < prm.p_min;
+        A.p[i] = fr ? 0.0 : P;
+        if (fr) {
+          A.sxx[i] = A.syy[i] = A.sxy[i] = 0.0;
+          if (A.q) A.q[i] = 0.0;
+        } else {
+          vmax = std::max(vmax, speed(rho, P, A.vx[i], A.vy[i]));
+        }
+        ++changed;
+      }
+    }
+  }
+  return {vmax, changed};
+}
+
+}  // namespace smpm::kern
