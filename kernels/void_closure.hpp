@@ -149,7 +149,10 @@ CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const
       }
       sm[g] += A.m[i];
       sv[g] += A.V[i];
-      const bool fr = eos.cold(A.m[i] / A.V[i]) + gr * energy(i) < prm.p_min;
+      // the constitutive update stored zero stress on every fractured point: only those need
+      // the EOS (the same expression it tested, so the same answer)
+      const bool zero = (A.p[i] == 0.0) & (A.sxx[i] == 0.0) & (A.syy[i] == 0.0) & (A.sxy[i] == 0.0);
+      const bool fr = zero && eos.cold(A.m[i] / A.V[i]) + gr * energy(i) < prm.p_min;
       nfr[g] += fr;
       ncomp[g] += A.p[i] > 0.0;
       any |= fr;
