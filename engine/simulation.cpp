@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 #include <type_traits>
+#include <utility>
 
 #include "engine/checkpoint.hpp"
 #include "engine/diagnostics.hpp"
@@ -142,6 +143,15 @@ void Simulation::step(double dt_max) {
   box_nodes_ += double(box_.nodes());
 }
 
+// The fracture thresholds of a material [Pa, kg/m^3]: tension below -spall_strength, or
+// expansion past rho0 / 2, fractures a point. The second catches hot debris whose energy term
+// keeps the pressure up: at rho = 1e-5 rho0 its Mie-Grueneisen sound speed reached 1e8 m/s and
+// stalled a porous run at dt = 1e-5 ns. Without a spall strength nothing fractures.
+static std::pair<double, double> fracture_limits(const Material& m) {
+  const bool spall = m.spall_strength > 0.0;
+  return {spall ? -m.spall_strength : -1e300, spall ? 0.5 * m.rho0 : 0.0};
+}
+
 // kern::merge_closed_faces over the grid of this step's scatter (docs/method.md, "Closed voids").
 void Simulation::merge_closed_faces() {
   if (cfg_.void_faces != VoidFaces::Separate || !cfg_.void_face_merge) return;
@@ -166,7 +176,8 @@ void Simulation::close_cracks() {
                               opt(P_.q), opt(P_.e), P_.vx.data(), P_.vy.data(), P_.body.data(),
                               P_.field.empty() ? nullptr : P_.field.data(),
                               materials_.size() > 1 ? select_[k].data() : nullptr};
-    const kern::CrackParams prm{-mat.spall_strength, 0.5 * mat.rho0};  // as stress_pass's cutoff
+    const auto [p_min, rho_min] = fracture_limits(mat);
+    const kern::CrackParams prm{p_min, rho_min};
     with_material(mat, [&](const auto& eos, const auto& str) {
       const auto r = kern::close_cracks(A, order_.data(), cell_start_.data(), grid_.geom.num_keys(), prm, eos,
                                         [&](double rho, double P, double vx, double vy) {
@@ -287,12 +298,9 @@ auto Simulation::stress_pass(double& thread0_seconds) {
     q.av_length = grid_.geom.h;
     q.av_linear = cfg_.av_linear;
     q.av_quadratic = cfg_.av_quadratic;
-    // spall: tension below -spall_strength, or expansion past rho0 / 2, fractures a point. The
-    // second catches hot debris whose energy term keeps the pressure up: at rho = 1e-5 rho0 its
-    // Mie-Grueneisen sound speed reached 1e8 m/s and stalled a porous run at dt = 1e-5 ns.
-    const bool spall = materials_[k].spall_strength > 0.0;
-    q.p_min = spall ? -materials_[k].spall_strength : -1e300;
-    q.rho_min = spall ? 0.5 * materials_[k].rho0 : 0.0;
+    const auto [p_min, rho_min] = fracture_limits(materials_[k]);
+    q.p_min = p_min;
+    q.rho_min = rho_min;
     q.midstep = midstep_;
   }
   return [this, pv = P_.view(), state, params = std::move(params), &thread0_seconds](
