@@ -9,8 +9,10 @@
 // The points then overlapped (1.8 / 2.5 % of the strip's band at h = 2 / 1 um) and the
 // compaction front converged about 3 % slow. Now a field-1 point whose every node (every node
 // its shape function weighs) is filled to the weld's threshold by the two fields together, one
-// of them holding both fields (welded), has its void closed around it: it joins field 0 for good.
-// A point next to an open gap has an unfilled node and stays.
+// of them holding both fields (welded), joins field 0 for good: a void that was there has
+// closed, or the point lies where the field boundary runs through solid material (then the
+// merge spreads until field 1 is the layer whose nodes reach into a void). A point next to an
+// open gap has an unfilled node and stays.
 //
 // close_cracks: a point that spalled while its void collapsed (tension past the cutoff: zero
 // stress, expanded) can end up inside compacted material, at zero pressure among cell-mates
