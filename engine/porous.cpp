@@ -109,7 +109,10 @@ Particles mirror_y(const Particles& P, double y_plane) {
 namespace smpm {
 
 void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
-                       double period) {
+                       double period, int nfields) {
+  if (nfields != 2 && nfields != 4)
+    throw std::invalid_argument("assign_void_sides: nfields must be 2 or 4, got " + std::to_string(nfields));
+  const bool across = nfields == 4;
   const std::size_t n = P.size();
   P.field.assign(n, 0);
   if (voids.empty() || n == 0) return;
@@ -141,7 +144,7 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, 
     const double x = P.x[p], y = P.y[p];
     const long by = static_cast<long>(std::floor((y - ymin) / B)), bx = column(x);
     double best = reach;
-    double side = 0.0;
+    double side = 0.0, lat = 0.0;  // (x - c) . s and (x - c) x s of the nearest void
     for (long j = std::max(by - 1, 0L); j <= std::min(by + 1, nby - 1); ++j) {
       for (long di = -1; di <= 1; ++di) {
         long i = bx + di;
@@ -160,11 +163,12 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, 
           if (d < best) {
             best = d;
             side = dx * sx + dy * sy;
+            lat = dx * sy - dy * sx;
           }
         }
       }
     }
-    P.field[p] = side > 0.0 ? 1 : 0;
+    P.field[p] = static_cast<std::uint8_t>((side > 0.0 ? 1 : 0) + (across && lat > 0.0 ? 2 : 0));
   }
 }
 

@@ -45,8 +45,11 @@ Particles mirror_y(const Particles& P, double y_plane);
 // (the impact direction): 1 where (x - c) . s > 0. The two faces of a void that a shock
 // closes along s then lie in different fields, which approach each other freely until they
 // meet (kern::grid_contact, weld). Points with no void within `reach` [m] of their surface
-// take field 0. period > 0: distances in x wrap. Sets P.field.
+// take field 0. period > 0: distances in x wrap. nfields = 4 splits each side again across s:
+// field + 2 where (x - c) x s = (x - c)_x s_y - (x - c)_y s_x > 0, so that the faces of a void
+// that close across s (a void a few cells wide collapses from all sides) lie in different fields
+// too. Sets P.field (0 .. nfields - 1).
 void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
-                       double period);
+                       double period, int nfields = 2);
 
 }  // namespace smpm

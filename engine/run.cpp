@@ -249,6 +249,9 @@ std::string describe_scene(const Scene& sc) {
       << b.particles << " particles, area " << b.area * 1e12 << " um^2"
       << (b.voids ? ", porosity " + std::to_string(b.porosity) + " (" + std::to_string(b.voids) + " voids)" : "")
       << "\n";
+  if (sc.solver.void_faces == VoidFaces::Separate)
+    o << "void faces      " << sc.solver.void_face_fields << " velocity fields, welded at " << sc.solver.void_face_volume_fraction
+      << " of a cell" << (sc.solver.void_face_merge ? ", merged once closed" : "") << "\n";
   Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
   const double dt = sim.stable_dt();
   o << "time step       " << dt * 1e9 << " ns (" << (sc.solver.fixed_dt > 0 ? "fixed" : "CFL at t = 0") << ")\n";

@@ -258,8 +258,16 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
       void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
       s.solver.void_face_merge = r.boolean("void_face_merge", true);
+      const long nf = r.integer("void_face_fields", 2, 4, 2);
+      if (nf == 3)
+        throw CaseError("case key 'contact.void_face_fields' = 3: allowed are 2 (the faces split along the impact "
+                        "direction) and 4 (split across it too, for voids a few cells wide)");
+      if (nf == 4 && s.solver.transfer != Transfer::APIC)
+        throw CaseError("case key 'contact.void_face_fields' = 4 runs with solver.transfer = \"apic\" only (the weld of "
+                        "four fields takes APIC's scatter velocity); use 2 with FLIP");
+      s.solver.void_face_fields = static_cast<int>(nf);
     } else {
-      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells", "void_face_merge"})
+      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells", "void_face_merge", "void_face_fields"})
         if (r.has(k))
           throw CaseError(std::string("case key 'contact.") + k + "' applies with contact.void_faces = \"separate\" only; "
                           "this case has \"single_field\"" + (can ? "" : " (the default here: no voids, two-body contact or MUSL)"));
@@ -505,7 +513,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       if (s.solver.scheme != Scheme::USL)
         throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
       assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
-                        s.geom.periodic_x ? s.geom.length_x() : 0.0);
+                        s.geom.periodic_x ? s.geom.length_x() : 0.0, s.solver.void_face_fields);
     }
   }
   for (std::size_t b = 0; b < s.bodies.size(); ++b)

@@ -42,6 +42,12 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
     if (cfg_.contact) throw std::invalid_argument("separated void faces and two-body contact together need four velocity fields (not implemented)");
     if (cfg_.scheme != Scheme::USL) throw std::invalid_argument("separated void faces run with scheme 'usl' only");
     if (P_.field.size() != n) throw std::invalid_argument("separated void faces: the particles carry no field (assign_void_sides)");
+    if (cfg_.void_face_fields != 2 && cfg_.void_face_fields != 4)
+      throw std::invalid_argument("void-face velocity fields must be 2 or 4, got " + std::to_string(cfg_.void_face_fields));
+    for (std::uint8_t f : P_.field)
+      if (f >= cfg_.void_face_fields)
+        throw std::invalid_argument("separated void faces: a particle's field is outside the " +
+                                    std::to_string(cfg_.void_face_fields) + " velocity fields");
   }
   if (cfg_.fields() == 1) std::vector<std::uint8_t>().swap(P_.field);
   // optional fields: only what the materials and solver settings need
@@ -56,6 +62,10 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
   // the mid-step strain rate needs the heating gather (APIC or FLIP with an energy field), USL
+  if (cfg_.fields() > 2 && !(transfer_heat() && cfg_.transfer == Transfer::APIC))
+    throw std::invalid_argument("four void-face velocity fields (contact.void_face_fields = 4) need transfer 'apic' and "
+                                "an energy field (a Mie-Grueneisen material or heat conduction): their weld takes APIC's "
+                                "scatter velocity");
   const bool can_mid = cfg_.scheme == Scheme::USL && transfer_heat();
   if (cfg_.strain_rate == StrainRate::Midstep && !can_mid)
     throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl' and an "

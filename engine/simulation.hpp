@@ -70,7 +70,10 @@ struct SolverConfig {
   // a fractured point among compressed points of its cell, body and field: the group shares one
   // density (kern::close_cracks), so cracks inside compacted material close
   bool crack_closure = true;
-  int fields() const { return contact || void_faces == VoidFaces::Separate ? 2 : 1; }
+  // velocity fields of the void faces: 2 (split along the impact direction) or 4 (across it
+  // too; APIC with an energy field only: kern::grid_contact's weld_fields), engine/porous.hpp
+  int void_face_fields = 2;
+  int fields() const { return contact ? 2 : void_faces == VoidFaces::Separate ? void_face_fields : 1; }
 };
 
 // A step that cannot go on: a particle left the grid or its volume became non-positive.

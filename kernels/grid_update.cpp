@@ -134,13 +134,70 @@ void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all
     }
 }
 
-void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
-                  const ContactParams& c, double* row_loss) {
+namespace {
+
+// The weld of any number of velocity fields with APIC's scatter velocity (q.scatter_velocity):
+// at a node where at least two fields hold mass and all fields together fill vmin, every field
+// present takes the centre-of-mass velocity, after the forces and before them (p / m in px, py).
+// The heating gather's scatter loss then counts 1/2 m_f |u_f - u_cm|^2 per field, together the
+// weld's loss (for two fields 1/2 mu |u_0 - u_1|^2), and the mid-step L is the single field's:
+// no contact heat (heat = 0).
+void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q, double vmin,
+                 double* row_loss) {
   int i0, i1;
   real_columns(g, box, i0, i1);
   const std::size_t fs = G.fstride;
+  const int K = G.fields;
+#pragma omp parallel for schedule(static)
+  for (int j = box.j0; j <= box.j1; ++j) {
+    double row = 0.0;
+    for (int i = i0; i <= i1; ++i) {
+      const std::size_t a = g.node(i, j);
+      double M = 0.0, V = 0.0, mvx = 0.0, mvy = 0.0, mpx = 0.0, mpy = 0.0;
+      int present = 0;
+      for (int f = 0; f < K; ++f) {
+        const std::size_t k = a + f * fs;
+        G.heat[k] = 0.0;
+        V += G.vol[k];
+        const double m = G.m[k];
+        if (m <= q.mass_eps) continue;
+        ++present;
+        M += m;
+        mvx += m * G.vx[k];
+        mvy += m * G.vy[k];
+        mpx += m * G.px[k];
+        mpy += m * G.py[k];
+      }
+      if (present < 2 || V < vmin) continue;
+      const double cx = mvx / M, cy = mvy / M, px = mpx / M, py = mpy / M;
+      for (int f = 0; f < K; ++f) {
+        const std::size_t k = a + f * fs;
+        if (G.m[k] <= q.mass_eps) continue;
+        const double rx = G.px[k] - px, ry = G.py[k] - py;
+        row += 0.5 * G.m[k] * (rx * rx + ry * ry);
+        G.px[k] = px;
+        G.py[k] = py;
+        G.vx[k] = cx;  // (scatter_velocity means APIC: no FLIP increments)
+        G.vy[k] = cy;
+      }
+    }
+    if (row_loss) row_loss[j + g.pad] = row;
+  }
+}
+
+}  // namespace
+
+void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
+                  const ContactParams& c, double* row_loss) {
   const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
   if (row_loss) std::fill(row_loss, row_loss + g.sy(), 0.0);
+  if (c.weld && q.scatter_velocity) {
+    weld_fields(g, box, G, q, vmin, row_loss);
+    return;
+  }
+  int i0, i1;
+  real_columns(g, box, i0, i1);
+  const std::size_t fs = G.fstride;
 #pragma omp parallel for schedule(static)
   for (int j = box.j0; j <= box.j1; ++j) {
     double row = 0.0;
@@ -152,23 +209,9 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
       const double M = m0 + m1;
       const double cx = (m0 * G.vx[a] + m1 * G.vx[b]) / M, cy = (m0 * G.vy[a] + m1 * G.vy[b]) / M;
       double ux, uy;  // corrected velocity of field 0
-      if (c.weld) {
+      if (c.weld) {  // FLIP's (APIC's: weld_fields)
         ux = cx;
         uy = cy;
-        // both fields take the merged scatter velocity too: the heating gather's scatter loss
-        // then counts 1/2 m_f |u_f - u_cm|^2 per field, together the weld's loss
-        // 1/2 mu |u_0 - u_1|^2, and the mid-step L is the single field's (no heat array read)
-        if (q.scatter_velocity) {
-          const double px = (m0 * G.px[a] + m1 * G.px[b]) / M, py = (m0 * G.py[a] + m1 * G.py[b]) / M;
-          const double rx = G.px[a] - G.px[b], ry = G.py[a] - G.py[b];
-          G.px[a] = G.px[b] = px;
-          G.py[a] = G.py[b] = py;
-          const double loss = 0.5 * m0 * m1 / M * (rx * rx + ry * ry);
-          row += loss;
-          G.vx[a] = G.vx[b] = ux;  // (scatter_velocity means APIC: no FLIP increments)
-          G.vy[a] = G.vy[b] = uy;
-          continue;
-        }
       } else {
         // sum_p m_p grad N_i(x_p) points out of each body (mass grows the other way)
         double nx = G.gmx[b] - G.gmx[a], ny = G.gmy[b] - G.gmy[a];

@@ -6,6 +6,8 @@
 #include <cstddef>
 #include <algorithm>
 #include <cstdint>
+#include <stdexcept>
+#include <string>
 
 #include "views.hpp"
 
@@ -150,21 +152,23 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
 // one after another. Each tile accumulates K values per node into an L1-resident scratch block
 // covering its footprint (body(block, s0, s1) for the particles at sorted positions [s0, s1)),
 // then the block is handed node by node to flush(values, grid_node), clipped to the node
-// storage (a partial last tile's block reaches past it). With F fields the block holds F
-// sub-blocks of span * span nodes; `values` points at the node in the first. Fixed tile order and fixed particle
+// storage (a partial last tile's block reaches past it). With F fields (F <= FMax, the scratch's
+// capacity) the block holds F sub-blocks of span * span nodes; `values` points at the node in the
+// first. Fixed tile order and fixed particle
 // order within a tile make every node's sum independent of the thread count.
 struct TileBlock {
   double* s;
   int i0, j0, span;
 };
 
-template <int K, int F = 1, class Body, class Flush>
-void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush) {
+template <int K, int FMax = 1, class Body, class Flush>
+void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush, int F = 1) {
+  if (F < 1 || F > FMax) throw std::invalid_argument("colored scatter: " + std::to_string(F) + " velocity fields, at most " + std::to_string(FMax));
   const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
 #pragma omp parallel
   {
-    alignas(64) double scratch[K * F * tile_span(kMaxTile) * tile_span(kMaxTile)];
+    alignas(64) double scratch[K * FMax * tile_span(kMaxTile) * tile_span(kMaxTile)];
     for (int color = 0; color < 4; ++color) {
       const int cx = color & 1, cy = color >> 1;
       const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
@@ -216,13 +220,15 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
 }
 
 // Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
-// two velocity fields, with mass gradients and volumes.
+// G.fields velocity fields (two bodies: two, with mass gradients; void faces: two or four, with
+// volumes).
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  constexpr int K = Contact ? (Normals ? 8 : 6) : 5, F = Contact ? 2 : 1;
+  constexpr int K = Contact ? (Normals ? 8 : 6) : 5, FMax = Contact ? (Normals ? 2 : 4) : 1;
+  const int F = Contact ? G.fields : 1;
   const std::size_t field_block = static_cast<std::size_t>(K) * tile_span(g.tile) * tile_span(g.tile);
-  for_each_tile_colored<K, F>(
+  for_each_tile_colored<K, FMax>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
         p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order,
@@ -246,7 +252,8 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
             if constexpr (Contact && !Normals) G.vol[n] += v[5];
           }
         }
-      });
+      },
+      F);
 }
 
 // Reference scatters for tests and benchmarks: one thread into the grid, or all threads with

@@ -68,7 +68,7 @@ struct GridView {
   // the node's total mass [J/kg] (the same value in every field's slot), which the heating
   // gather hands to the particles (kern::grid_contact, kern::g2p_particle)
   double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr; double* heat = nullptr;
-  std::size_t fstride = 0;  // num_nodes() with two fields, 0 with one
+  std::size_t fstride = 0;  // num_nodes() with several fields, 0 with one
   int fields = 1;
   // The view of field f alone (a one-field view into the same storage).
   GridView field(int f) const {

@@ -12,7 +12,8 @@
 // of them holding both fields (welded), joins field 0 for good: a void that was there has
 // closed, or the point lies where the field boundary runs through solid material (then the
 // merge spreads until field 1 is the layer whose nodes reach into a void). A point next to an
-// open gap has an unfilled node and stays.
+// open gap has an unfilled node and stays. With four void-face fields (contact.void_face_fields)
+// the same holds for a point of any field but 0: full counts all fields, welded any two.
 //
 // close_cracks: a point that spalled while its void collapsed (tension past the cutoff: zero
 // stress, expanded) can end up inside compacted material, at zero pressure among cell-mates
@@ -41,13 +42,14 @@ namespace smpm::kern {
 // ---- merge_closed_faces ----------------------------------------------------------------------
 
 struct MergeParams {
-  double fill = 0.9;     // node volume (sum of both fields' sum_p w V_p) in cells at which a node is full
+  double fill = 0.9;     // node volume (sum over the fields of sum_p w V_p) in cells at which a node is full
   double mass_eps = 0.0; // a field with at most this mass at a node is absent there
   double lp = 0.25;      // uGIMP half width in cells (Shape::eval)
 };
 
-// Points [0, n): field[p] 1 -> 0 where its nodes are all full and one is welded. The grid holds
-// this step's scatter (per field: m, vol; field 1 at offset G.fstride). Each point is decided
+// Points [0, n): field[p] > 0 -> 0 where its nodes are all full and one is welded (two fields
+// hold mass there). The grid holds this step's scatter (per field: m, vol; field f at offset
+// f G.fstride). Each point is decided
 // on its own from the grid: race-free and the same for any thread count. Returns the number
 // of points merged.
 template <class Shape>
@@ -59,7 +61,7 @@ std::size_t merge_closed_faces(const GridGeom& g, const GridView& G, const doubl
   const long cnt = static_cast<long>(n);
 #pragma omp parallel for schedule(static) reduction(+ : merged)
   for (long p = 0; p < cnt; ++p) {
-    if (field[p] != 1) continue;
+    if (field[p] == 0) continue;
     double wx[Shape::N], dwx[Shape::N], wy[Shape::N], dwy[Shape::N];
     const int bx = Shape::eval((x[p] - g.x0) / g.h, q.lp, wx, dwx);
     const int by = Shape::eval((y[p] - g.y0) / g.h, q.lp, wy, dwy);
@@ -71,11 +73,17 @@ std::size_t merge_closed_faces(const GridGeom& g, const GridView& G, const doubl
         int i = bx + a;
         if (g.periodic_x) i = ((i % g.nx) + g.nx) % g.nx;  // the scatter folded the ghosts onto these
         const std::size_t k = g.node(i, by + b);
-        if (G.vol[k] + G.vol[k + fs] < full) {
+        double V = 0.0;
+        int present = 0;
+        for (int f = 0; f < G.fields; ++f) {
+          V += G.vol[k + f * fs];
+          present += G.m[k + f * fs] > q.mass_eps;
+        }
+        if (V < full) {
           all_full = false;
           break;
         }
-        welded |= (G.m[k] > q.mass_eps) & (G.m[k + fs] > q.mass_eps);
+        welded |= present >= 2;
       }
     }
     if (all_full && welded) {
@@ -124,7 +132,7 @@ CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const
   constexpr int kGroups = 8;  // (body, field) pairs in one cell; more are left alone
   const double gr = eos.gamma_rho();
   const auto energy = [&](std::uint32_t i) { return A.e ? A.e[i] : 0.0; };
-  const auto tag_of = [&](std::uint32_t i) { return A.body[i] * 2 + (A.field ? A.field[i] : 0); };
+  const auto tag_of = [&](std::uint32_t i) { return A.body[i] * 4 + (A.field ? A.field[i] : 0); };  // at most 4 fields
   const auto counted = [&](std::uint32_t i) {
     return (!A.select || A.select[A.body[i]]) && !(A.m[i] < prm.rho_min * A.V[i]);  // debris
   };

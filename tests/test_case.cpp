@@ -292,7 +292,23 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
   CHECK_THROWS_WITH(build({"solver.crack_closure=1"}), Catch::Contains("crack_closure"));
   CHECK_THROWS_WITH(build({"contact.void_face_volume_fraction=3"}), Catch::Contains("allowed 0.1 to 2"));
   CHECK_THROWS_WITH(build({"solver.scheme=\"musl\"", "contact.void_faces=\"separate\""}),
-                    Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));
+                    Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));  // four void-face fields (session 22): 2 by default, 4 on request, nothing else; APIC only
+  CHECK(build({}).solver.void_face_fields == 2);
+  CHECK(build({"contact.void_face_fields=4"}).solver.void_face_fields == 4);
+  CHECK(build({"contact.void_face_fields=4"}).solver.fields() == 4);
+  CHECK_THROWS_WITH(build({"contact.void_face_fields=3"}), Catch::Contains("'contact.void_face_fields' = 3: allowed are 2"));
+  CHECK_THROWS_WITH(build({"contact.void_face_fields=8"}), Catch::Contains("void_face_fields"));
+  CHECK_THROWS_WITH(build({"contact.void_face_fields=4", "solver.transfer=\"flip\""}),
+                    Catch::Contains("runs with solver.transfer = \"apic\" only"));
+  CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_fields=4"}),
+                    Catch::Contains("'contact.void_face_fields' applies with contact.void_faces = \"separate\" only"));
+  {
+    Scene sc = build({"contact.void_face_fields=4"});
+    Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+    std::size_t in_upper = 0;
+    for (std::uint8_t f : sim.particles().field) in_upper += f >= 2;
+    CHECK(in_upper > 0);  // the assignment used the fields across the impact direction
+  }
 }
 
 TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear error", "[case]") {

@@ -635,3 +635,66 @@ TEST_CASE("weld of void faces: centre of mass, merged scatter velocity, loss 1/2
   CHECK(G.vx[part] == 3.0);
   CHECK(G.vx[part + fs] == -3.0);
 }
+
+// Four void-face fields (contact.void_face_fields = 4): the weld takes every field present at a
+// full node to the centre of mass; its loss is sum_f 1/2 m_f |u_f - u_cm|^2 of the scatter
+// velocities; a node with one field, or below the fill, is left alone.
+TEST_CASE("weld of four void-face fields: centre of mass of the fields present, loss, momentum", "[contact]") {
+  const GridGeom g = make_geom(false);
+  Grid grid(g, false, 4);
+  auto G = grid.view();
+  REQUIRE(G.fields == 4);
+  const std::size_t full = g.node(3, 4), lone = g.node(5, 4), part = g.node(6, 4), fs = G.fstride;
+  const double h2 = g.h * g.h;
+  // full node: fields 0, 1 and 3 hold mass (field 2 none), together 0.95 h^2
+  const double m[4] = {2.0, 1.0, 0.0, 1.0}, u[4] = {1.0, -2.0, 0.0, 4.0}, w[4] = {0.0, 1.0, 0.0, -1.0};
+  const double v[4] = {1.5, -1.0, 0.0, 2.0};
+  for (int f = 0; f < 4; ++f) {
+    const std::size_t k = full + f * fs;
+    G.m[k] = m[f];
+    G.px[k] = u[f];
+    G.py[k] = w[f];
+    G.vx[k] = v[f];
+    G.vy[k] = 0.5 * v[f];
+    G.vol[k] = m[f] > 0 ? 0.95 * h2 * m[f] / 4.0 : 0.0;
+  }
+  // a full node with one field only, and a node of two fields below the fill
+  G.m[lone + 2 * fs] = 1.0;
+  G.vx[lone + 2 * fs] = 7.0;
+  G.vol[lone + 2 * fs] = h2;
+  G.m[part] = G.m[part + 3 * fs] = 1.0;
+  G.vx[part] = 3.0;
+  G.vx[part + 3 * fs] = -3.0;
+  G.vol[part] = G.vol[part + 3 * fs] = 0.25 * h2;
+  GridUpdateParams q;
+  q.scatter_velocity = true;
+  ContactParams c;
+  c.weld = true;
+  c.volume_fraction = 0.9;
+  c.midstep = true;
+  std::vector<double> loss(static_cast<std::size_t>(g.sy()), 0.0);
+  grid_contact(g, g.all_nodes(), G, q, c, loss.data());
+  const double M = 4.0, cx = (2 * 1.5 - 1.0 + 2.0) / M, ux = (2 * 1.0 - 2.0 + 4.0) / M, uy = (0.0 + 1.0 - 1.0) / M;
+  double expected = 0.0, mom = 0.0;
+  for (int f = 0; f < 4; ++f) {
+    const std::size_t k = full + f * fs;
+    if (m[f] == 0.0) {
+      CHECK(G.vx[k] == 0.0);  // an absent field keeps its (zero) velocity
+      continue;
+    }
+    CHECK(G.vx[k] == Approx(cx));
+    CHECK(G.vy[k] == Approx(0.5 * cx));
+    CHECK(G.px[k] == Approx(ux));
+    CHECK(G.py[k] == Approx(uy).margin(1e-15));
+    CHECK(G.heat[k] == 0.0);
+    mom += m[f] * G.vx[k];
+    expected += 0.5 * m[f] * ((u[f] - ux) * (u[f] - ux) + (w[f] - uy) * (w[f] - uy));
+  }
+  CHECK(mom == Approx(2 * 1.5 - 1.0 + 2.0));
+  double total = 0;
+  for (double l : loss) total += l;
+  CHECK(total == Approx(expected));
+  CHECK(G.vx[lone + 2 * fs] == 7.0);
+  CHECK(G.vx[part] == 3.0);
+  CHECK(G.vx[part + 3 * fs] == -3.0);
+}

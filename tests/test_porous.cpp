@@ -161,6 +161,31 @@ TEST_CASE("void sides: the faces of a void across the impact direction lie in di
   CHECK(int(P.field[0]) == 1);
 }
 
+TEST_CASE("void sides, four fields: the faces across and along the impact direction differ", "[porous]") {
+  Particles P;
+  P.resize(5);
+  // a void of radius 1 at the origin: points above-right, above-left, below-right, below-left,
+  // and one beyond reach; the impact direction is y, so field = (above) + 2 (right: (x - c) x s > 0)
+  const double xs[] = {0.8, -0.8, 0.8, -0.8, 0.0}, ys[] = {0.8, 0.8, -0.8, -0.8, 10.0};
+  for (int i = 0; i < 5; ++i) {
+    P.x[i] = xs[i];
+    P.y[i] = ys[i];
+  }
+  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, 0.0, 1.0, 3.0, 0.0, 4);
+  CHECK(int(P.field[0]) == 3);
+  CHECK(int(P.field[1]) == 1);
+  CHECK(int(P.field[2]) == 2);
+  CHECK(int(P.field[3]) == 0);
+  CHECK(int(P.field[4]) == 0);
+  // every pair of faces opposite through the centre, and every pair facing each other across or
+  // along y, lies in two fields
+  CHECK(P.field[0] != P.field[3]);
+  CHECK(P.field[1] != P.field[2]);
+  CHECK(P.field[0] != P.field[1]);
+  CHECK(P.field[0] != P.field[2]);
+  CHECK_THROWS_AS(assign_void_sides(P, {{0.0, 0.0, 1.0}}, 0.0, 1.0, 3.0, 0.0, 3), std::invalid_argument);
+}
+
 // Issue 14's single-void acceptance test: a void of radius 10 um in dense Al shocked at
 // 1000 m/s onto the wall, h = 4 um (2 x 2 points per cell), at 20 ns (collapsed by about 13 ns).
 // Open area measured here (pixels of a quarter point spacing): one velocity field 17.0 % of the
@@ -210,6 +235,7 @@ TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, 
       {"porous_impact_1000.toml", {"solver.shape=\"cubic\""}},
       {"porous_impact_1000.toml", {"solver.shape=\"ugimp\"", "solver.strain_rate=\"midstep\""}},
       {"porous_impact_1000.toml", {"bodies.target.voids.radius_um=4.0"}},
+      {"porous_impact_1000.toml", {"bodies.target.voids.radius_um=4.0", "contact.void_face_fields=4"}},
       {"porous_symmetric_1000.toml", {"bodies.target.velocity_m_s=[0.0, -2000.0]"}},
       // FLIP (the 0.99 blend): its transfers' loss heats the points too (kern::g2p_particle)
       {"porous_impact_1000.toml", {"solver.transfer=\"flip\"", "solver.strain_rate=\"midstep\""}},
@@ -233,9 +259,11 @@ TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, 
 }
 
 TEST_CASE("separated void faces: bitwise the same on 1 and 2 threads", "[porous][determinism]") {
-  auto run = [](int threads) {
+  const std::string nf = GENERATE(as<std::string>{}, "2", "4");  // void-face fields
+  auto run = [&](int threads) {
     omp_set_num_threads(threads);
     auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/void_collapse.toml");
+    apply_overrides(doc, {"contact.void_face_fields=" + nf});
     Scene sc = build_scene(doc, "vc", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
     Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
     while (sim.time() < 15e-9) sim.step(15e-9 - sim.time());

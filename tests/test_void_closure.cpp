@@ -182,3 +182,36 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   CHECK(merge_closed_faces<QuadraticBSpline>(g, G, &x[4], &y[4], f2.data(), 1, q) == 0);
   CHECK(int(f2[0]) == 1);
 }
+
+TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full counts all fields", "[unit][porous]") {
+  GridGeom g;
+  g.h = 1e-6;
+  g.nx = 8;
+  g.ny = 8;
+  const std::size_t nn = g.num_nodes();
+  std::vector<double> m(4 * nn, 0.0), vol(4 * nn, 0.0);
+  // fields 2 and 3 fill the grid between them (0.5 + 0.45 of a cell), field 0 and 1 absent
+  for (std::size_t k = 0; k < nn; ++k) {
+    m[k + 2 * nn] = 1.0, vol[k + 2 * nn] = 0.5 * g.h * g.h;
+    m[k + 3 * nn] = 1.0, vol[k + 3 * nn] = 0.45 * g.h * g.h;
+  }
+  GridView G{};
+  G.m = m.data();
+  G.vol = vol.data();
+  G.fstride = nn;
+  G.fields = 4;
+  MergeParams q;
+  q.fill = 0.9;
+  q.mass_eps = 1e-9;
+  const std::vector<double> x{3.5e-6, 3.5e-6, 3.5e-6}, y{3.5e-6, 3.5e-6, 3.5e-6};
+  std::vector<std::uint8_t> field{3, 2, 1};
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, G, x.data(), y.data(), field.data(), 3, q) == 3);
+  CHECK(int(field[0]) == 0);
+  CHECK(int(field[1]) == 0);
+  CHECK(int(field[2]) == 0);
+  // field 3 alone fills no node (0.45 of a cell): the merge needs the fields together
+  for (std::size_t k = 0; k < nn; ++k) vol[k + 2 * nn] = 0.4 * g.h * g.h;
+  std::vector<std::uint8_t> f3{3};
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, G, x.data(), y.data(), f3.data(), 1, q) == 0);
+  CHECK(int(f3[0]) == 3);
+}
