@@ -173,7 +173,7 @@ def swept_hugoniot(outdir, run, window, driver):
         return math.nan, math.nan
 
 
-def summarise(outdir, region, window, driver):
+def summarise(outdir, region, window, driver=None):
     run = json.load(open(os.path.join(outdir, "run.json")))
     series = [r for r in read_csv(os.path.join(outdir, "series.csv")) if r["region"] == region]
     last = series[-1]
@@ -181,7 +181,7 @@ def summarise(outdir, region, window, driver):
     e0, e1 = float(energy[0]["total_J_per_m"]), float(energy[-1]["total_J_per_m"])
     res = float(energy[-1].get("residual_J_per_m", "nan"))
     comp = next((b.get("compacted_hugoniot", {}) for b in run.get("bodies", []) if "compacted_hugoniot" in b), {})
-    phi, swept_rh = swept_hugoniot(outdir, run, window, driver)
+    phi, swept_rh = swept_hugoniot(outdir, run, window, driver) if driver else (math.nan, math.nan)
     return {
         "swept_porosity": phi,
         "swept_rh": swept_rh,
