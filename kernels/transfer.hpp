@@ -228,14 +228,24 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
   constexpr int K = Contact ? (Normals ? 8 : 6) : 5, FMax = Contact ? (Normals ? 2 : 4) : 1;
   const int F = Contact ? G.fields : 1;
   const std::size_t field_block = static_cast<std::size_t>(K) * tile_span(g.tile) * tile_span(g.tile);
+  // the fields this thread's current tile scatters into (bit f): the flush skips the others'
+  // blocks, which hold zeros (most tiles of a four-field run hold two or three fields)
+  static thread_local unsigned tile_fields = 0;
   for_each_tile_colored<K, FMax>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
+        if constexpr (Contact) {
+          unsigned used = 0;
+          for (std::uint32_t s = s0; s < s1; ++s) used |= 1u << P.field(order[s]);
+          tile_fields = used;
+        }
         p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order,
                                                                     s0, s1, lp);
       },
       [&](const double* v0, std::size_t n0) {
         for (int f = 0; f < F; ++f) {
+          if constexpr (Contact)
+            if (!((tile_fields >> f) & 1u)) continue;
           const double* v = v0 + f * field_block;
           const std::size_t n = n0 + f * G.fstride;
           G.px[n] += v[1];
