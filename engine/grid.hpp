@@ -14,9 +14,10 @@ struct Grid {
   int fields = 1;
 
   Grid() = default;
-  // fields = 2: two velocity fields (two-body contact or separated void faces), every array holds
-  // one block per field.
-  Grid(const kern::GridGeom& g, bool flip, int nfields = 1) : geom(g), fields(nfields) {
+  // nfields > 1: several velocity fields (two-body contact or separated void faces), every array
+  // holds one block per field; the mass gradients only with normals (two-body contact: a weld
+  // of void faces needs none).
+  Grid(const kern::GridGeom& g, bool flip, int nfields = 1, bool normals = true) : geom(g), fields(nfields) {
     const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields);
     for (auto* a : {&m, &px, &py, &fx, &fy, &vx, &vy}) a->assign(nn, 0.0);
     if (flip) {  // FLIP increments only where the transfer needs them
@@ -24,7 +25,9 @@ struct Grid {
       dvy.assign(nn, 0.0);
     }
     if (nfields > 1)
-      for (auto* a : {&gmx, &gmy, &vol, &heat}) a->assign(nn, 0.0);
+      for (auto* a : {&vol, &heat}) a->assign(nn, 0.0);
+    if (nfields > 1 && normals)
+      for (auto* a : {&gmx, &gmy}) a->assign(nn, 0.0);
   }
   kern::GridView view() {
     auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };

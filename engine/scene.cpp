@@ -182,7 +182,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       throw CaseError("case key 'grid.y_range': height " + format_number((y1 - y0) * 1e6, 10) +
                       " um is not a whole number of cells of 'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
     s.geom.periodic_x = r.boolean("periodic_x", false);
-    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 8));
+    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
     if (s.geom.periodic_x && s.geom.nx < 4)
       throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
                       std::to_string(s.geom.nx));

@@ -25,7 +25,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       materials_(std::move(materials)),
       body_material_(std::move(body_material)),
       P_(std::move(particles)),
-      grid_(geom, cfg.transfer == Transfer::FLIP, cfg.fields()) {
+      grid_(geom, cfg.transfer == Transfer::FLIP, cfg.fields(), cfg.contact) {
   if (geom.tile < 4 || geom.tile > kern::kMaxTile)
     throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
   const std::size_t n = P_.size();
@@ -83,6 +83,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
   row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.sy()), 0.0);
   row_loss_.assign(static_cast<std::size_t>(geom.sy()), 0.0);
+  if (cfg_.void_faces == VoidFaces::Separate && cfg_.void_face_merge) node_state_.assign(geom.num_nodes(), 0);
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
@@ -168,8 +169,8 @@ void Simulation::merge_closed_faces() {
   Timed t(times_.contact);
   const kern::MergeParams q{cfg_.void_face_volume_fraction, mass_eps_, cfg_.ugimp_lp};
   kern::with_shape(cfg_.shape, [&](auto shape) {
-    kern::merge_closed_faces<decltype(shape)>(grid_.geom, grid_.view(), P_.x.data(), P_.y.data(), P_.field.data(),
-                                              P_.size(), q);
+    kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), P_.x.data(), P_.y.data(),
+                                              P_.field.data(), P_.size(), q, node_state_.data());
   });
 }
 
@@ -480,7 +481,8 @@ std::size_t Simulation::bytes() const {
   return P_.bytes() + grid_.bytes() +
          (key_.capacity() + order_.capacity() + cell_start_.capacity() + hist_.capacity() + scratch_u_.capacity()) *
              sizeof(std::uint32_t) +
-         (scratch_d_.capacity() + gather_scratch_.capacity() + heat_sink_.capacity()) * sizeof(double) + scratch_b_.capacity();
+         (scratch_d_.capacity() + gather_scratch_.capacity() + heat_sink_.capacity()) * sizeof(double) + scratch_b_.capacity() +
+         node_state_.capacity();
 }
 
 }  // namespace smpm

@@ -117,20 +117,15 @@ void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const Grid
 }
 
 void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all) {
+  if (b.empty()) return;
+  double* const arrays[] = {G.px, G.py, G.m, G.fx, G.fy, G.vol, G.gmx, G.gmy};
+  const int count = !all ? 2 : G.gmx ? 8 : G.vol ? 6 : 5;  // two-body contact, a weld, one field
+  const std::size_t len = static_cast<std::size_t>(b.i1 - b.i0 + 1);
 #pragma omp parallel for schedule(static) collapse(2)
   for (int f = 0; f < G.fields; ++f)
     for (int j = b.j0; j <= b.j1; ++j) {
-      const std::size_t n0 = g.node(b.i0, j) + f * G.fstride, n1 = n0 + (b.i1 - b.i0 + 1);
-      for (std::size_t n = n0; n < n1; ++n) {
-        G.px[n] = 0.0;
-        G.py[n] = 0.0;
-        if (all) {
-          G.m[n] = 0.0;
-          G.fx[n] = 0.0;
-          G.fy[n] = 0.0;
-          if (G.gmx) G.gmx[n] = G.gmy[n] = G.vol[n] = 0.0;
-        }
-      }
+      const std::size_t n0 = g.node(b.i0, j) + f * G.fstride;
+      for (int k = 0; k < count; ++k) std::fill(arrays[k] + n0, arrays[k] + n0 + len, 0.0);
     }
 }
 

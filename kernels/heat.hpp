@@ -63,7 +63,7 @@ void heat_scatter(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, 
           }
         }
       },
-      [&](const double* v, std::size_t n) {
+      [&](const double* v, std::size_t n, int) {
         H.cap[n] += v[0];
         H.capT[n] += v[1];
       });

@@ -53,6 +53,7 @@ struct GridSink {
     Add::add(G.gmy[n], gmy);
     Add::add(G.vol[n], vol);
   }
+  inline void add_volume(std::size_t n, double vol) const { Add::add(G.vol[n], vol); }
 };
 
 // Largest tile width the scratch block is sized for (grid.tile_cells is checked against it).
@@ -149,23 +150,30 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
 
 // Colored iteration over tiles: tiles of one color (tile parity in x and y) touch disjoint
 // nodes (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
-// one after another. Each tile accumulates K values per node into an L1-resident scratch block
-// covering its footprint (body(block, s0, s1) for the particles at sorted positions [s0, s1)),
-// then the block is handed node by node to flush(values, grid_node), clipped to the node
-// storage (a partial last tile's block reaches past it). With F fields (F <= FMax, the scratch's
-// capacity) the block holds F sub-blocks of span * span nodes; `values` points at the node in the
-// first. Fixed tile order and fixed particle
-// order within a tile make every node's sum independent of the thread count.
+// one after another. Each tile accumulates K values per node into an L1/L2-resident scratch
+// block covering its footprint (body(block, s0, s1) for the particles at sorted positions
+// [s0, s1)), then the block is handed node by node to flush(values, grid_node, f), clipped to
+// the node storage (a partial last tile's block reaches past it). With F fields (F <= FMax, the
+// scratch's capacity) the block holds F sub-blocks of span * span nodes, field f's at
+// f * K * span * span; fields(s0, s1) says which of them the tile's particles scatter into
+// (bit f), and only those are zeroed and flushed (a four-field run's tiles mostly hold two or
+// three). Fixed tile order and fixed particle order within a tile make every node's sum
+// independent of the thread count.
 struct TileBlock {
   double* s;
   int i0, j0, span;
 };
+struct OneField {
+  unsigned operator()(std::uint32_t, std::uint32_t) const { return 1u; }
+};
 
-template <int K, int FMax = 1, class Body, class Flush>
-void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush, int F = 1) {
+template <int K, int FMax = 1, class Body, class Flush, class Fields = OneField>
+void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush, int F = 1,
+                           Fields&& fields = Fields{}) {
   if (F < 1 || F > FMax) throw std::invalid_argument("colored scatter: " + std::to_string(F) + " velocity fields, at most " + std::to_string(FMax));
   const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
+  const std::size_t block = static_cast<std::size_t>(K) * span * span;
 #pragma omp parallel
   {
     alignas(64) double scratch[K * FMax * tile_span(kMaxTile) * tile_span(kMaxTile)];
@@ -179,14 +187,19 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
         if (s0 == s1) continue;
         const TileBlock blk{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
-        std::fill(scratch, scratch + K * F * span * span, 0.0);
+        const unsigned used = F > 1 ? fields(s0, s1) : 1u;
+        for (int f = 0; f < F; ++f)
+          if ((used >> f) & 1u) std::fill(scratch + f * block, scratch + (f + 1) * block, 0.0);
         body(blk, s0, s1);
         const int jn = std::min(span, g.ny + g.pad - blk.j0 + 1);
         const int in = std::min(span, g.nx + g.pad - blk.i0 + 1);
-        for (int jj = 0; jj < jn; ++jj) {
-          const std::size_t row = g.node(blk.i0, blk.j0 + jj);
-          const double* sr = scratch + K * jj * span;
-          for (int ii = 0; ii < in; ++ii) flush(sr + K * ii, row + ii);
+        for (int f = 0; f < F; ++f) {
+          if (!((used >> f) & 1u)) continue;
+          for (int jj = 0; jj < jn; ++jj) {
+            const std::size_t row = g.node(blk.i0, blk.j0 + jj);
+            const double* sr = scratch + f * block + K * jj * span;
+            for (int ii = 0; ii < in; ++ii) flush(sr + K * ii, row + ii, f);
+          }
         }
       }
     }
@@ -227,43 +240,34 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
                  const std::uint32_t* cell_start, double lp) {
   constexpr int K = Contact ? (Normals ? 8 : 6) : 5, FMax = Contact ? (Normals ? 2 : 4) : 1;
   const int F = Contact ? G.fields : 1;
-  const std::size_t field_block = static_cast<std::size_t>(K) * tile_span(g.tile) * tile_span(g.tile);
-  // the fields this thread's current tile scatters into (bit f): the flush skips the others'
-  // blocks, which hold zeros (most tiles of a four-field run hold two or three fields)
-  static thread_local unsigned tile_fields = 0;
   for_each_tile_colored<K, FMax>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
-        if constexpr (Contact) {
-          unsigned used = 0;
-          for (std::uint32_t s = s0; s < s1; ++s) used |= 1u << P.field(order[s]);
-          tile_fields = used;
-        }
         p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order,
                                                                     s0, s1, lp);
       },
-      [&](const double* v0, std::size_t n0) {
-        for (int f = 0; f < F; ++f) {
-          if constexpr (Contact)
-            if (!((tile_fields >> f) & 1u)) continue;
-          const double* v = v0 + f * field_block;
-          const std::size_t n = n0 + f * G.fstride;
-          G.px[n] += v[1];
-          G.py[n] += v[2];
-          if constexpr (What == P2GWhat::All) {
-            G.m[n] += v[0];
-            G.fx[n] += v[3];
-            G.fy[n] += v[4];
-            if constexpr (Contact && Normals) {
-              G.gmx[n] += v[5];
-              G.gmy[n] += v[6];
-              G.vol[n] += v[7];
-            }
-            if constexpr (Contact && !Normals) G.vol[n] += v[5];
+      [&](const double* v, std::size_t n0, int f) {
+        const std::size_t n = n0 + f * G.fstride;
+        G.px[n] += v[1];
+        G.py[n] += v[2];
+        if constexpr (What == P2GWhat::All) {
+          G.m[n] += v[0];
+          G.fx[n] += v[3];
+          G.fy[n] += v[4];
+          if constexpr (Contact && Normals) {
+            G.gmx[n] += v[5];
+            G.gmy[n] += v[6];
+            G.vol[n] += v[7];
           }
+          if constexpr (Contact && !Normals) G.vol[n] += v[5];
         }
       },
-      F);
+      F,
+      [&](std::uint32_t s0, std::uint32_t s1) {
+        unsigned used = 0;
+        for (std::uint32_t s = s0; s < s1; ++s) used |= 1u << P.field(order[s]);
+        return used;
+      });
 }
 
 // Reference scatters for tests and benchmarks: one thread into the grid, or all threads with

@@ -33,7 +33,7 @@ struct GridGeom {
   double h = 1.0, x0 = 0.0, y0 = 0.0;
   int nx = 1, ny = 1;   // cells
   int pad = 2;          // ghost nodes per side (>= 2 serves every shape function here)
-  int tile = 8;         // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
+  int tile = 16;        // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
   bool periodic_x = false;
 
   int sx() const { return nx + 1 + 2 * pad; }  // storage row length

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The reference study: runs every case in cases/paper/ (4.5-7 min each on 2 cores for the porous
+# The reference study: runs every case in cases/paper/ (5-9.5 min each on 2 cores for the porous
 # ones; porosity 0.09 and 0.01, at h = 8 um, under 4 min on 2 cores; docs/study.md "Session 15"), makes
 # every figure, and writes the summary table to out/paper/summary.md.
 #   bash scripts/study.sh [CASE.toml ...]    (default: all of cases/paper/*.toml)

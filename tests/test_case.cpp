@@ -112,7 +112,7 @@ TEST_CASE("run.json reports the nodes the grid passes worked on: the occupied bo
     return std::stod(json.substr(at + key.size() + 5));
   };
   // 8 x 20 cells, 2 ghost nodes a side: 13 x 25 nodes. The body fills the lower half (cells 0-9,
-  // tile rows 0 and 1 of 8 cells): node rows -1 .. 17 (the tiles' blocks), all 13 columns
+  // tile row 0 of 16 cells): node rows -1 .. 17 (the tile's block of 16 + 3 rows), all 13 columns
   // (periodic x)
   CHECK(number("nodes") == 13 * 25);
   CHECK(number("active_nodes") == 13 * 19);

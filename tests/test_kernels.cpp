@@ -331,6 +331,50 @@ TEST_CASE("colored scatter matches a serial scatter to 1e-13 relative", "[transf
   check_colored_vs_serial<CubicBSpline>(true);
 }
 
+// Four void-face fields (a weld's scatter: volumes, no normals): the colored scatter, which
+// zeroes and flushes only the fields a tile's particles hold, against a serial scatter of every
+// particle into its field, for several tile widths (the default is 16) and with fields 1 and 3
+// empty (the tiles skip them: they must stay exactly zero).
+TEST_CASE("colored scatter into four velocity fields matches a serial scatter, any tile width", "[transfer][contact]") {
+  for (int tile : {4, 7, 16}) {
+    for (bool sparse : {false, true}) {
+      INFO("tile " << tile << ", fields 0 and 2 only " << sparse);
+      GridGeom g = make_geom(true);
+      g.tile = tile;
+      Particles P = random_particles(g, 20000, 13);
+      P.field.resize(P.size());
+      for (std::size_t i = 0; i < P.size(); ++i) P.field[i] = static_cast<std::uint8_t>(sparse ? 2 * (i % 2) : (i * 7) % 4);
+      auto pv = P.view();
+      pv.field_of = P.field.data();
+      const Bins b = bin(g, P);
+      Grid a(g, false, 4, false), s(g, false, 4, false);
+      REQUIRE(a.gmx.empty());
+      auto A = a.view(), S = s.view();
+      clear_grid(g, g.all_nodes(), A, true);
+      clear_grid(g, g.all_nodes(), S, true);
+      p2g_colored<QuadraticBSpline, true, P2GWhat::All, true, false>(g, A, pv, b.order.data(), b.start.data(), 0.25);
+      p2g_range<QuadraticBSpline, true, P2GWhat::All, GridSink<PlainAdd>, true, false>(
+          g, GridSink<PlainAdd>{g, S}, pv, b.order.data(), 0, P.size(), 0.25);
+      double worst = 0;
+      for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::fx, &Grid::fy, &Grid::vol}) {
+        const auto& x = a.*arr;
+        const auto& y = s.*arr;
+        double scale = 0;
+        for (double v : y) scale = std::max(scale, std::fabs(v));
+        for (std::size_t n = 0; n < x.size(); ++n) worst = std::max(worst, std::fabs(x[n] - y[n]) / scale);
+      }
+      CHECK(worst < 1e-13);
+      if (sparse) {
+        const std::size_t nn = g.num_nodes();
+        bool empty = true;
+        for (int f : {1, 3})
+          for (std::size_t n = 0; n < nn; ++n) empty &= a.m[n + f * nn] == 0.0 && a.px[n + f * nn] == 0.0 && a.vol[n + f * nn] == 0.0;
+        CHECK(empty);
+      }
+    }
+  }
+}
+
 TEST_CASE("colored scatter is bitwise identical for 1 and 2 threads", "[transfer]") {
   const GridGeom g = make_geom(true);
   Particles P = random_particles(g, 30000, 9);
@@ -362,6 +406,7 @@ void check_occupied_box(bool periodic) {
   GridGeom g = make_geom(periodic);
   g.nx = 61;
   g.ny = 45;
+  g.tile = 8;  // the boxes below are in tiles of 8 cells
   Particles P = random_particles(g, 4000, 21);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> X(g.x0 + 17.3 * g.h, g.x0 + 40.6 * g.h), Y(g.y0 + 9.5 * g.h, g.y0 + 25.2 * g.h);

@@ -161,6 +161,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   MergeParams q;
   q.fill = 0.9;
   q.mass_eps = 1e-9;
+  std::vector<std::uint8_t> state(nn, 7);  // node states: every real node is written
   // points (in cells): 0 anywhere -> merges; 1 next to an unfilled node -> stays; 2 in field 0;
   // 3 where field 1 is absent from every node of its support -> stays; 4 across the periodic seam
   const std::vector<double> x{3.5e-6, 5.5e-6, 3.5e-6, 1.5e-6, 0.1e-6};
@@ -169,7 +170,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   for (int j = 5; j <= 8; ++j)
     for (int i = 0; i <= 3; ++i) m[g.node(i, j) + nn] = 0.0;  // no field 1 near point 3
   std::vector<std::uint8_t> field{1, 1, 0, 1, 1};
-  const std::size_t merged = merge_closed_faces<QuadraticBSpline>(g, G, x.data(), y.data(), field.data(), 5, q);
+  const std::size_t merged = merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), field.data(), 5, q, state.data());
   CHECK(merged == 2);
   CHECK(int(field[0]) == 0);
   CHECK(int(field[1]) == 1);
@@ -179,7 +180,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   // an unfilled node across the periodic seam keeps point 4 in field 1
   std::vector<std::uint8_t> f2{1};
   vol[g.node(g.nx - 1, 1)] = 0.0;
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, G, &x[4], &y[4], f2.data(), 1, q) == 0);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, &x[4], &y[4], f2.data(), 1, q, state.data()) == 0);
   CHECK(int(f2[0]) == 1);
 }
 
@@ -203,15 +204,16 @@ TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full 
   MergeParams q;
   q.fill = 0.9;
   q.mass_eps = 1e-9;
+  std::vector<std::uint8_t> state(nn, 7);
   const std::vector<double> x{3.5e-6, 3.5e-6, 3.5e-6}, y{3.5e-6, 3.5e-6, 3.5e-6};
   std::vector<std::uint8_t> field{3, 2, 1};
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, G, x.data(), y.data(), field.data(), 3, q) == 3);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), field.data(), 3, q, state.data()) == 3);
   CHECK(int(field[0]) == 0);
   CHECK(int(field[1]) == 0);
   CHECK(int(field[2]) == 0);
   // field 3 alone fills no node (0.45 of a cell): the merge needs the fields together
   for (std::size_t k = 0; k < nn; ++k) vol[k + 2 * nn] = 0.4 * g.h * g.h;
   std::vector<std::uint8_t> f3{3};
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, G, x.data(), y.data(), f3.data(), 1, q) == 0);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), f3.data(), 1, q, state.data()) == 0);
   CHECK(int(f3[0]) == 3);
 }
