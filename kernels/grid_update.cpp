@@ -7,12 +7,6 @@ namespace smpm::kern {
 
 namespace {
 
-// Column range of the box's nodes that carry state: periodic x keeps 0..nx-1 (ghosts are copies).
-inline void real_columns(const GridGeom& g, const NodeBox& b, int& i0, int& i1) {
-  i0 = std::max(b.i0, g.periodic_x ? 0 : -g.pad);
-  i1 = std::min(b.i1, g.periodic_x ? g.nx - 1 : g.nx + g.pad);
-}
-
 inline void apply_wall(Wall w, double& vn, double& vt) {
   if (w == Wall::Slip) vn = 0.0;
   else if (w == Wall::NoSlip) vn = vt = 0.0;

@@ -82,6 +82,12 @@ struct GridView {
   }
 };
 
+// Column range of the box's nodes that carry state: periodic x keeps 0..nx-1 (ghosts are copies).
+inline void real_columns(const GridGeom& g, const NodeBox& b, int& i0, int& i1) {
+  i0 = std::max(b.i0, g.periodic_x ? 0 : -g.pad);
+  i1 = std::min(b.i1, g.periodic_x ? g.nx - 1 : g.nx + g.pad);
+}
+
 // Particle fields the transfer kernels read or write. Plane strain: stress is the deviator
 // (sxx, syy, sxy; szz = -(sxx + syy)) and the pressure p; total stress = s - p I.
 struct ParticleView {
