@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Speed against error (issue 15): a matrix of solver settings on reference scenes, each run's
+"""Speed against error: a matrix of solver settings on reference scenes, each run's
 error against its exact or extrapolated answer and its cost, one table and one chart per
 quantity with the Pareto front marked.
 
@@ -14,13 +14,13 @@ Scenes and their truth:
                   exact step placed at the measured front, over v times the length; the elastic
                   precursor counts as error (large at 500 m/s)
           energy  energy.csv residual over the initial total
-  porous  cases/verify/porous_strip.toml (issue 14's strip: the same 105 voids at every h):
+  porous  cases/verify/porous_strip.toml (the convergence strip: the same 105 voids at every h):
           front speed (100-190 ns fit), band III mean P, T, rho, U_y, <R^2>, <D^2>, open porosity at
           200 ns and the total energy change, each (energy, open porosity: their own value) against the Richardson extrapolation of the three finest cell sizes run
           (with the observed order), or the finest run where the differences do not shrink;
           one truth for every setting: the default settings' limit (quadratic, APIC) where the
           matrix has three of its cell sizes, else each setting family's own limit.
-Cost: particle-steps and wall seconds (run.json), at --threads (default 2) in the same session.
+Cost: particle-steps and wall seconds (run.json), at --threads (default 2) in the same invocation.
 
   /usr/bin/python3 bench/accuracy.py --quick           # about a minute: the CI subset (tests/accuracy_quick.sh)
   /usr/bin/python3 bench/accuracy.py --matrix medium   # every shape and transfer at 1000 m/s, the strip to h = 1
@@ -109,8 +109,8 @@ def matrix(kind):
             for h in (8.0, 4.0, 2.0, 1.0):
                 runs.append(("porous", "porous_strip.toml", {"grid.cell_size_um": h, "solver.shape": shape,
                                                              "solver.transfer": transfer}))
-    # FLIP with the updated strain rate (its default until session 19, which lost 6-9 % of the
-    # energy on the strip; the default is now the mid-step energy, the FLIP family above)
+    # FLIP with the updated strain rate (not the default: it loses 6-9 % of the energy on the
+    # strip; FLIP's default is the mid-step strain rate, the FLIP family above)
     for h in (8.0, 4.0, 2.0, 1.0):
         runs.append(("porous", "porous_strip.toml", {"grid.cell_size_um": h, "solver.transfer": "flip",
                                                      "solver.strain_rate": "updated"}))
@@ -270,7 +270,7 @@ def main():
                 raise ValueError(run.get("status", "?") + ": " + run.get("message", ""))
             row = {"scene": scene, "case": case, "settings": settings, "label": label(settings),
                    "particle_steps": run["particles"] * run["steps"], "wall_s": run["wall_seconds"],
-                   "threads": run["threads"], "cached": cached, "dir": str(out)}
+                   "threads": run["threads"], "cached": cached, "dir": os.path.relpath(out, ROOT)}
             if scene == "dense":
                 _, err, val = dense_errors(out)
                 row.update(errors=err, values=val)
@@ -352,7 +352,7 @@ def main():
     over = []
     for r in (r for r in rows if r["scene"] == "dense"):
         # the check covers every shape but the linear hat, APIC and FLIP, USL and MUSL, each
-        # with its default strain rate (the mid-step energy since session 19: FLIP at h = 5 um,
+        # with its default strain rate (mid-step: FLIP at h = 5 um,
         # 1000 m/s, Us +0.12 %, T +0.84 %; MUSL energy +0.13 %); reported, not bounded: the
         # linear hat, whose cell-crossing errors grow as h shrinks (full matrix: P -34 % at
         # h = 1.25 um, 1000 m/s; docs/accuracy.md), and FLIP with the updated strain rate
