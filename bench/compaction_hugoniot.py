@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""The simulated compaction wave against the fully compacted porous Hugoniot (issue 15, item 3).
+"""The simulated compaction wave against the fully compacted porous Hugoniot
+(docs/model.md, "The fully compacted porous Hugoniot").
 
-Issue 14's strip (cases/verify/porous_strip.toml, voids of 10 um) with 14, 55 and 105 voids
+The convergence strip (cases/verify/porous_strip.toml, voids of 10 um) with 14, 55 and 105 voids
 (porosity about 0.09, 0.3 and 0.5) driven onto the wall at 500, 1000 and 2000 m/s. Per run:
 the compaction front speed in the wall frame (front.csv, least squares over 0.3-0.95 of the run,
 which ends at 70 % of the time a front at the Hugoniot speed takes to meet the free top coming
@@ -16,7 +17,7 @@ fully dense). The strip is --length-um high (the void count scales with it).
 --width-um widens the strip (periodic sides; the void count scales with its area), --set passes
 case overrides to every run (e.g. materials.al.yield_stress_MPa=0 for a material without strength).
 
-Prints a markdown table (docs/accuracy.md, "Compaction against the porous Hugoniot").
+Prints a markdown table (docs/accuracy.md).
 """
 import argparse
 import csv

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Wall seconds of every compiled file in a clean build of the test script's targets (all_tests),
-# slowest first, and the build's total wall time (docs/performance.md, "Build time").
+# slowest first, and the build's total wall time (docs/performance.md).
 #   bash bench/compile_times.sh BUILD_DIR [cmake arguments ...]
 # e.g. the sanitizer build as scripts/test.sh configures it:
 #   bash bench/compile_times.sh /tmp/asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSHOCKMPM_SANITIZE=ON \

@@ -2,7 +2,6 @@
 # Old build against new on the porous benchmark scene, alternated, 2 threads: the particle-steps
 # per second the driver reports (run.json), median of N runs each, with the median wall time and
 # phase times (run.json's phase_seconds) and the median of the new/old ratios of each round.
-# Issue 14's cost check.
 #   [CASE=FILE] [ALSO="B3 B4 ..."] bash bench/porous_ab.sh OLD_SHOCKMPM NEW_SHOCKMPM [N=3] [STEPS=300] [EXTRA --set ...]
 # CASE: another scene (default cases/bench/porous_shock.toml). OLD and NEW may be wrapper
 # scripts that add --set keys (e.g. `exec build/shockmpm "$@" --set grid.tile_cells=8`).

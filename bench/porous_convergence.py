@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Speed against error for porous runs: a case at several cell sizes, one table.
 
-Runs the driver on a case (default cases/verify/porous_strip.toml, issue 14's strip) at each cell
+Runs the driver on a case (default cases/verify/porous_strip.toml, the convergence strip) at each cell
 size, then tabulates per run, for the region (default III) at the last series.csv time:
 
   front    compaction-front speed in the wall frame [m/s]: least squares of front.csv over the
@@ -28,9 +28,9 @@ compacted Rankine-Hugoniot front from run.json (compacted_hugoniot).
       [--case FILE] [--region III] [--window 100,190] [--driver build/shockmpm] [--reuse] [--check]
 
 --reuse tabulates existing outputs in DIR without running. --check exits 1 unless the first
-(coarsest) run meets issue 14's single-run figures (open porosity under 2 %, zero-P share under
+(coarsest) run meets the figures one run must show (open porosity under 2 %, zero-P share under
 5 %, front within 5 % of the compacted Hugoniot, energy within 1e-8; ctest strip_closure). Output: a markdown table on stdout.
-Figures in docs/verification.md ("Porous strip") come from this script.
+Figures in docs/verification.md for the porous strip come from this script.
 """
 import argparse
 import csv
@@ -217,7 +217,7 @@ def main():
     ap.add_argument("--driver", default=os.path.join(root, "build/shockmpm"))
     ap.add_argument("--reuse", action="store_true", help="tabulate existing outputs, run nothing")
     ap.add_argument("--check", action="store_true",
-                    help="exit 1 unless the first (coarsest) run meets issue 14's figures that one run shows: "
+                    help="exit 1 unless the first (coarsest) run meets the figures one run must show: "
                          "open porosity under 2 %%, under 5 %% of the band at zero pressure, front within 5 %% "
                          "of the fully compacted Rankine-Hugoniot front, energy within 1e-8")
     a = ap.parse_args()

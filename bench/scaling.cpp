@@ -23,9 +23,9 @@
 // moment. Its ratio is printed as "machine", and each phase's ratio divided by it as
 // "of machine": a vCPU of a shared host does not always deliver a whole core. A second
 // reference, a STREAM triad over 3 x 32 MiB (far beyond the L3), gives the memory system's own
-// 2/1 in the same rounds ("memory"): what a memory-bound phase can gain at that moment. On this
-// VM it has ranged from 1.1 to 1.9 between sessions (bench/throughput.py's triad), and a
-// neighbour's traffic can lower it without touching the compute reference.
+// 2/1 in the same rounds ("memory"): what a memory-bound phase can gain at that moment. On a
+// shared 2-vCPU VM it ranged from 1.1 to 1.9 between runs of bench/throughput.py (its
+// triad), and a neighbour's traffic can lower it without touching the compute reference.
 #include <omp.h>
 
 #include <algorithm>

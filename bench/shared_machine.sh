@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Throughput on an idle and on a loaded machine, for OpenMP wait policies (issue: a run must
+# Throughput on an idle and on a loaded machine, for OpenMP wait policies (a run must
 # keep its speed when another CPU-bound process shares the cores).
 #   bench/shared_machine.sh [BUILD_DIR] [STEPS]
 # For each policy, each load (idle; one CPU-bound process beside the run: a single `yes > /dev/null`) and 1 and 2

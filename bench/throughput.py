@@ -5,7 +5,7 @@ particles, with 1 and 2 threads, against this machine's measured roofs.
 For every scene, size and thread count it runs `shockmpm run` for a fixed number of steps and
 reads run.json: particle-steps/s, wall seconds per phase (sort, P2G, grid update, contact,
 G2P, constitutive update, heat, diagnostics, output), resident bytes per particle, peak RSS.
-In the same session it runs bench/machine_roofs (STREAM-like triad, FMA throughput) with 1 and
+In the same invocation it runs bench/machine_roofs (STREAM-like triad, FMA throughput) with 1 and
 2 threads, and prints, per phase, the bytes and flops per particle-step of the kernel (the
 model below) and the fraction of its roof the phase reaches:
     roof time per particle-step = max(bytes / triad bandwidth, flops / FMA throughput)
@@ -208,7 +208,7 @@ def tables(results, roof):
     for r in sorted(results, key=lambda r: (r["scene"], float(r["size"]), r["threads"])):
         n = r["particles"] * r["steps"]
         cfg = r["solver"]
-        # the grid passes work on the occupied box of nodes (run.json active_nodes, since session 5)
+        # the grid passes work on the occupied box of nodes (run.json active_nodes)
         npp = r.get("active_nodes", r["nodes"]) / r["particles"]
         R = roof[r["threads"]]
         for ph in PHASES:

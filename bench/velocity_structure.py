@@ -17,7 +17,7 @@ for each h, the local slope zeta between successive r, and S2(r) / r^2 [1/us^2],
 
   /usr/bin/python3 bench/velocity_structure.py DIR [--h 4,2,1] [--time-ns 200] [--band 50,150]
 
-Writes a markdown table on stdout. Figures in docs/verification.md ("Porous strip") come from it.
+Writes a markdown table on stdout. Figures in docs/verification.md for the porous strip come from it.
 """
 import argparse
 import csv

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Area a collapsing void leaves open, by volume: cases/verify/void_collapse.toml (issue 14).
+"""Area a collapsing void leaves open, by volume: cases/verify/void_collapse.toml.
 
 Runs the single-void case and the same block without the void at each cell size (snapshots every
 2 ns), then, at each snapshot time, takes the strip below a cut that lies between two lattice
@@ -18,9 +18,9 @@ test_porous measures the same collapse with rasterized point disks instead (void
 block without the void has no void faces, and the driver rejects them there.
 
 --check PCT: exit 1 unless the open area at the last time is within +-PCT % at every h (the CI
-test void_open_area: h = 4 um, 7 %; measured -5.0 % since session 19).
+test void_open_area: h = 4 um, 7 %; measured -5.0 %).
 
-Writes a markdown table on stdout (docs/verification.md, "Hard cases").
+Writes a markdown table on stdout (docs/verification.md).
 """
 import argparse
 import os

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # libgomp's default spin (GOMP_SPINCOUNT=300000) against shockmpm's default (nothing set: the
 # driver sets GOMP_SPINCOUNT=1000, engine/main.cpp), 2 threads, alternated ROUNDS times in one
-# session; LOADED=1 runs a `yes > /dev/null` beside every run.
+# invocation; LOADED=1 runs a `yes > /dev/null` beside every run.
 #   bench/wait_policy_ab.sh [BUILD_DIR] [ROUNDS] [CASE --set ...]
 # Prints M particle-steps/s (run.json) of each run and the medians.
 set -euo pipefail

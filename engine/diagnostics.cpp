@@ -74,9 +74,9 @@ Moments moments(const std::vector<double>& v) {
 // update's zero pressure and zero deviator, kernels/constitutive.hpp), which holds at most the
 // volume intact material of its mass and specific internal energy takes at zero pressure,
 // m / rho_zp(e) (Mie-Grueneisen: thermal expansion, rho_zp below rho0 for a heated point;
-// rho0 without an energy field): its expansion past that is opened crack, i.e. void. (Until
-// session 18 the cap was m / rho0, which counted the thermal expansion of the hot seams as
-// void too: 0.5 of the porous strip's 3.8 % open porosity at h = 4 um, docs/verification.md.)
+// rho0 without an energy field): its expansion past that is opened crack, i.e. void. (A cap of
+// m / rho0 would count the thermal expansion of the hot seams as void too: 0.5 of 3.8 % open
+// porosity on the porous strip at h = 4 um.)
 // Debris flying alone keeps its APIC affine velocity gradient, so its V grows without bound
 // (rho down to 1e-4 kg/m^3 was seen in the study's baseline at h = 2 um), and counted as solid
 // it made a band's open porosity -40 instead of +0.02. An unstressed point at rho0 holds V

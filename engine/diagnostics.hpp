@@ -16,8 +16,8 @@ namespace smpm {
 // impact that brings it to rest). Scanning from the end away from the impact plane (`from_top`:
 // the body lies above the plane), the front is where the mean crosses that level, interpolated
 // linearly between row centres. Returns NaN when no row is reached, and when the first occupied
-// row from the far end is reached already: the wave has arrived there (front.csv then ends;
-// before, it went on with the released top or its ejecta). Needs vy0 != 0.
+// row from the far end is reached already: the wave has arrived there (front.csv then ends
+// rather than follow the released top or its ejecta). Needs vy0 != 0.
 double front_position(const Particles& P, std::uint8_t body, double vy0, double y0, double dy, int rows,
                       bool from_top);
 

@@ -19,7 +19,7 @@ namespace {
 // quick start ran at a third of its 1-thread speed. libgomp reads its settings when it is loaded,
 // before main, so when the user has set neither OMP_WAIT_POLICY nor GOMP_SPINCOUNT the driver sets
 // GOMP_SPINCOUNT=1000 and starts itself again, once (the variable is then set). Measured on the
-// 2-vCPU machine (docs/performance.md, "Shared machine"; bench/shared_machine.sh and
+// 2-vCPU machine (docs/performance.md; bench/shared_machine.sh and
 // bench/wait_policy_ab.sh): under that load 1000 spins ran 1.8-2.25x libgomp's default (passive
 // 2.2x, 10 000 spins 1.2x); idle, 1000 spins kept 96-99 % of its speed, passive 85-92 %.
 constexpr const char* kSpinCount = "1000";

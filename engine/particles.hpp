@@ -1,5 +1,6 @@
 // Particle state: structure of arrays, one contiguous array per field. A scene allocates only
-// the fields its models need (see Particles::Fields).
+// the fields its models need: the optional ones below stay empty unless enabled
+// (Particles::enable, enable_affine; fields_in_use lists those allocated).
 #pragma once
 #include <cstddef>
 #include <cstdint>

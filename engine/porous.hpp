@@ -1,6 +1,6 @@
-// Porous samples (physics.md section 3): random overlapping circular voids cut from a dense
-// lattice of points. Void centres are uniform in the body's rectangle; every point within a
-// void's radius is removed; voids may overlap. The porosity is the fraction of points removed.
+// Porous samples (docs/model.md, "Porous sample"): random overlapping circular voids cut from a
+// dense lattice of points. Void centres are uniform in the body's rectangle; every point within
+// a void's radius is removed; voids may overlap. The porosity is the fraction of points removed.
 #pragma once
 #include <cstddef>
 #include <cstdint>

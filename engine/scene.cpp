@@ -149,7 +149,8 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
     s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
     s.run.checkpoint_interval = r.number("checkpoint_interval_s", 0.0, 1e7, 300.0);
-    // sizes are checked against these before anything is allocated (check_size)
+    // sizes are checked against these before anything is allocated (the grid in [grid], the
+    // bodies' points in check_points, the snapshots' volume after the bodies)
     const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
     const double mem_default = phys > 0 ? 0.8 * phys / 1e9 : 16.0;
     s.run.max_memory = 1e9 * r.number("max_memory_gb", 1e-3, 1e6, mem_default);
@@ -419,7 +420,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
                          [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
       }
       if (src < 0 && r.has("voids")) {
-        // random overlapping circular voids (physics.md section 3)
+        // random overlapping circular voids (docs/model.md, "Porous sample")
         CaseReader v = r.table("voids");
         VoidSpec spec;
         spec.radius = v.quantity("radius", kLength, 1e-12, kInf);

@@ -71,8 +71,8 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
     throw std::invalid_argument("case key 'solver.strain_rate': 'midstep' needs scheme 'usl' and an "
                                 "energy field (a Mie-Grueneisen material or heat conduction); use 'auto' or 'updated'");
   // auto: mid-step energy except with the linear hat, whose cell crossings heat the dense shock
-  // state 13 % too hot with it (docs/accuracy.md; FLIP and uGIMP are exact with it since the
-  // kinematics take the updated L, session 19)
+  // state 13 % too hot with it (docs/accuracy.md; FLIP and uGIMP are exact with it because the
+  // kinematics take the updated L)
   const bool mid_default = cfg_.shape != kern::ShapeKind::Linear;
   midstep_ = can_mid && (cfg_.strain_rate == StrainRate::Midstep || (cfg_.strain_rate == StrainRate::Auto && mid_default));
   // ids name particles in messages and snapshots: their order as given
@@ -163,7 +163,7 @@ static std::pair<double, double> fracture_limits(const Material& m) {
   return {spall ? -m.spall_strength : -1e300, spall ? 0.5 * m.rho0 : 0.0};
 }
 
-// kern::merge_closed_faces over the grid of this step's scatter (docs/method.md, "Closed voids").
+// kern::merge_closed_faces over the grid of this step's scatter (docs/method.md).
 void Simulation::merge_closed_faces() {
   if (cfg_.void_faces != VoidFaces::Separate || !cfg_.void_face_merge) return;
   Timed t(times_.contact);
@@ -175,7 +175,7 @@ void Simulation::merge_closed_faces() {
 }
 
 // kern::close_cracks for every material with a tension cutoff, over the cells of this step's
-// binning (docs/method.md, "Closed voids"); the next step's signal speed takes the points it sets.
+// binning (docs/method.md); the next step's signal speed takes the points it sets.
 void Simulation::close_cracks() {
   if (!cfg_.crack_closure) return;
   Timed t(times_.constitutive);

@@ -30,9 +30,10 @@ enum class VoidFaces { SingleField, Separate };
 // Velocity of the USL strain rate: the node's mid-step velocity (energy-conserving step, not
 // symplectic: needs the damping of APIC or viscosity; with the heating gather only, APIC or FLIP
 // with an energy field) or the updated one (symplectic, loses dt^2 |f|^2 / 2m per node and
-// step). Auto: mid-step with APIC and the quadratic or cubic B-spline (shock runs), else
-// updated: with FLIP, uGIMP or the linear hat the mid-step rate conserves energy but puts the
-// dense Hugoniot state off by 2.5-30 % (docs/accuracy.md; kern::g2p_particle, docs/method.md).
+// step). The kinematics (volume, deviator) always take the updated velocity; only the
+// energy's work takes the mid-step one. Auto: mid-step for every shape but the linear hat, whose
+// cell crossings heat the dense shock state too hot with it (Simulation's constructor;
+// docs/accuracy.md, docs/method.md).
 enum class StrainRate { Auto, Midstep, Updated };
 // USL: stress from the updated grid velocity. MUSL: from the velocity remapped from the
 // updated particles.

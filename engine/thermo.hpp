@@ -1,11 +1,12 @@
 // Temperature from density and specific internal energy, and the Hugoniot of a material,
 // both computed from the code's own EOS part (kern::MieGruneisenEos).
 //
-// Temperature (physics.md section 2). Isentrope-referenced (default): the isentrope through
-// (rho0, T0) has T_s(V) = T0 exp(gamma0 (1 - V/V0)) (rho Gamma constant) and energy e_s(V) from
-// de = -P dV along it, integrated once (RK4, tabulated); then T = T_s(V) + (e - e_s(V)) / cv:
-// cold compression energy is recoverable and does not heat. "simple": T = T0 + e / cv, which
-// counts cold compression energy as heat (about twice the shock heating of dense Al at 1 km/s).
+// Temperature (docs/model.md, "Heating and temperature"). Isentrope-referenced (default): the
+// isentrope through (rho0, T0) has T_s(V) = T0 exp(gamma0 (1 - V/V0)) (rho Gamma constant) and
+// energy e_s(V) from de = -P dV along it, integrated once (RK4, tabulated); then
+// T = T_s(V) + (e - e_s(V)) / cv: cold compression energy is recoverable and does not heat.
+// "simple": T = T0 + e / cv, which counts cold compression energy as heat (about twice the shock
+// heating of dense Al at 1 km/s).
 #pragma once
 #include <vector>
 

@@ -34,7 +34,8 @@ struct LinearEos {
   SMPM_INLINE double bulk_modulus(double /*rho*/, double /*P*/) const { return K; }
 };
 
-// Mie-Grueneisen with a linear Us-up Hugoniot (physics.md section 2), mu = rho/rho0 - 1:
+// Mie-Grueneisen with a linear Us-up Hugoniot (docs/model.md, "Equation of state"),
+// mu = rho/rho0 - 1:
 //   compression  P = (C mu + D mu^2 + S mu^3)(1 - Gamma mu / 2) + Gamma rho e
 //   tension      P = C mu + Gamma rho e
 // C = rho0 c0^2, D = C (2 s - 1), S = C (s - 1)(3 s - 1), Gamma = gamma0 rho0 / rho.

@@ -12,8 +12,8 @@ inline void apply_wall(Wall w, double& vn, double& vt) {
   else if (w == Wall::NoSlip) vn = vt = 0.0;
 }
 
-// Applies all walls to node (i, j). Returns the velocity change due to the walls in fvx/fvy
-// split by wall: out[0] left (x), out[1] right (x), out[2] bottom (y), out[3] top (y).
+// Applies all walls to the velocity (vx, vy) of node (i, j) in place and adds the change each
+// wall made to dv: dv[0] left (x), dv[1] right (x), dv[2] bottom (y), dv[3] top (y).
 inline void constrain(const GridGeom& g, const Walls& W, int i, int j, double& vx, double& vy,
                       double* dv) {
   if (!g.periodic_x) {

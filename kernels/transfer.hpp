@@ -312,7 +312,7 @@ struct G2PParams {
 // deviator, viscosity) take L from v^new, the symplectic choice: with the mid-step rate there
 // too an undamped mode of frequency w grew by about (w dt)^2 / 4 per step in amplitude, and in
 // a porous body moving freely at 1000 m/s round-off grew to 0.5 GPa in 120 ns in its thin
-// ligaments (docs/method.md, "The mid-step instability").
+// ligaments (docs/method.md).
 //
 // Heat (APIC; FLIP below): both transfers dissipate kinetic energy, and both losses split exactly
 // into per-particle shares (the kinetic energy of a particle counts its affine field,
@@ -552,7 +552,7 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 // are those of g2p, bitwise (the same particle body; tests/test_kernels.cpp). The block size:
 // blocks of 256-2048 points made the gather 2-6 ns per point slower on one thread (each block
 // restarts the prefetch streams of both loops, about 20 arrays); 4096-16384 measured alike
-// (docs/performance.md, "What was tried").
+// (docs/performance.md).
 inline constexpr std::size_t kGatherBlock = 8192;
 inline constexpr std::size_t kGatherScratch = 7 * kGatherBlock;  // doubles per thread
 

@@ -1,13 +1,13 @@
-// What happens to a void after its faces have met (issue 14): two passes at the end of a step.
+// What happens to a void after its faces have met: two passes at the end of a step.
 //
 // merge_closed_faces: the two faces of a void lie in two velocity fields (engine/porous.cpp,
 // assign_void_sides) so that a gap narrower than a cell can keep closing; where the fields
 // together fill a node they are welded (kern::grid_contact). Once a void has closed the fields
-// have no reason to stay apart, but they did: the compacted material was left laminated, thin
-// layers of the two fields one over the other, and wherever a disturbance later dipped a node's
-// fill under the weld's threshold the layers moved apart independently and slid into each other.
-// The points then overlapped (1.8 / 2.5 % of the strip's band at h = 2 / 1 um) and the
-// compaction front converged about 3 % slow. Now a field-1 point whose every node (every node
+// have no reason to stay apart; kept apart, they leave the compacted material laminated, thin
+// layers of the two fields one over the other, and wherever a disturbance later dips a node's
+// fill under the weld's threshold the layers move apart independently and slide into each other
+// (the points overlap, 1.8 / 2.5 % of the strip's band at h = 2 / 1 um, and the compaction
+// front converges about 3 % slow). So a field-1 point whose every node (every node
 // its shape function weighs) is filled to the weld's threshold by the two fields together, one
 // of them holding both fields (welded), joins field 0 for good: a void that was there has
 // closed, or the point lies where the field boundary runs through solid material (then the
@@ -19,17 +19,17 @@
 // stress, expanded) can end up inside compacted material, at zero pressure among cell-mates
 // that carry the shock's. The grid's velocity field is smooth over a cell, so it cannot compress
 // one point of a cell apart from the others: the point's excess volume is a sub-cell volume mode
-// the grid does not see, and it stayed open for good (13 % of the strip's compacted points at
-// zero pressure at h = 4 um; the mean pressure 3-8 % low). Now, within a cell, where a group of
-// points (one body and one velocity field) holds both a fractured point (its EOS pressure below
+// the grid does not see, and left alone it stays open for good (13 % of the strip's compacted
+// points at zero pressure at h = 4 um; the mean pressure 3-8 % low). So within a cell, where a
+// group of points (one body and one velocity field) holds both a fractured point (its EOS pressure below
 // the cutoff) and a compressed one (P > 0), every point of the group takes the group's density
 // (its mass over its volume) and the pressure of the EOS at that density and its unchanged
 // energy; a point still in tension past the cutoff stays fractured. The volume moves within the
 // group only (the group's volume is conserved) and no energy changes: the exchange does no work,
 // as a crack that closes at zero stress does none. A group without a fractured point, or
 // without a compressed one (a spall plane in tension), is untouched. (The cell-averaged volume
-// of F-bar / "J-bar" methods against volumetric locking, applied only where a crack closes:
-// over every cell it kept the points of a weld overlapping, session 20.)
+// of F-bar / "J-bar" methods against volumetric locking is applied only where a crack closes:
+// applied over every cell it keeps the points of a weld overlapping.)
 #pragma once
 #include <algorithm>
 #include <cstddef>
@@ -53,7 +53,7 @@ struct MergeParams {
 // each node's state (bit 0 full, bit 1 welded) into node_state (g.num_nodes() bytes, indexed by
 // g.node; the box's real columns are written), then each point reads the states of its nodes:
 // 9 bytes instead of 9 nodes times 2 F doubles (four fields: contact phase 1.79 -> 1.61 s on
-// 300 steps of the 5 um case, docs/performance.md "Session 23"). Each point is decided on its
+// 300 steps of the 5 um case, docs/performance.md). Each point is decided on its
 // own from the grid: race-free and the same for any thread count.
 // Returns the number of points merged.
 template <class Shape>

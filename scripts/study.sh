@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The reference study: runs every case in cases/paper/ (5-9.5 min each on 2 cores for the porous
-# ones; porosity 0.09 and 0.01, at h = 8 um, under 4 min on 2 cores; docs/study.md "Session 15"), makes
-# every figure, and writes the summary table to out/paper/summary.md.
+# The reference study: runs every case in cases/paper/ (3-13 min each on 2 cores, docs/performance.md; porosity
+# 0.09 and 0.01, at h = 8 um, under 4 min; docs/study.md), makes every figure, and writes the
+# summary table to out/paper/summary.md.
 #   bash scripts/study.sh [CASE.toml ...]    (default: all of cases/paper/*.toml)
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -23,8 +23,8 @@ record both have is compared, so FINE may be a shorter run or one stopped early)
   varies along y, docs/accuracy.md).
 The difference is printed as (coarse - fine) / fine, except U_y's (over the impact speed) and the
 open porosity's (absolute, in points of porosity); the open porosity counts a fractured point's
-solid at most m / rho0 (engine/diagnostics.cpp) since 2026-11-27: older runs' bands with blown-up
-debris read far below 0.
+solid at most its volume at zero pressure, m / rho_zp(e) (engine/diagnostics.cpp), so that bands
+with blown-up debris do not read far below 0.
 """
 import argparse
 import json

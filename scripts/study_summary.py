@@ -12,9 +12,9 @@ Meeting time t_meet: the target (top y_top0, from run.json, falling at -v in the
 the compaction wave reaches it) has a free top; the compaction front of front.csv meets it at the
 first record with front_y >= y_top0 - v t - 2 cells. After that front.csv no longer tracks a
 compaction front: front_position (engine/diagnostics.cpp) scans rows from the top, and once the
-top rows move (rebound of the released top, ejecta flying up) it returned the top of the plate or
-of the ejecta, which moves up at 0.4-2.5 km/s. Since 2026-11-27 it returns NaN there and the
-driver ends front.csv: a completed run whose record stops early met the top at its last row.
+top rows move (rebound of the released top, ejecta flying up) it would find the top of the plate
+or of the ejecta, which moves up at 0.4-2.5 km/s; so it returns NaN there and the driver ends
+front.csv: a completed run whose record stops early met the top at its last row.
 
 Front speed: least-squares slope of front.csv, in the frame of the wall, over the first and the
 second half of the record before t_meet (the whole record when the front never meets the top).
@@ -71,7 +71,7 @@ def meeting_time(run, body, v, ft, fy):
         return None
     tol = 2.0 * cr.get("grid", {}).get("cell_size_um", 4.0)
     t_meet = next((t for t, y in zip(ft, fy) if y >= top0 - v * t * 1e-3 - tol), None)
-    # since 2026-11-27 the driver ends front.csv when the wave reaches the far end: a record that
+    # the driver ends front.csv when the wave reaches the far end: a record that
     # stops well before the run's end met the top at its last row
     t_end = run.get("end_time_s", 0.0) * 1e9
     if t_meet is None and run.get("status") == "completed" and len(ft) > 1 and ft[-1] < t_end - 3 * (ft[-1] - ft[-2]):

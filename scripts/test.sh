@@ -13,7 +13,7 @@ if [ "${SANITIZE:-1}" != 0 ]; then
     CMAKE_ARGS="-DSHOCKMPM_SANITIZE=ON -DSHOCKMPM_NATIVE=OFF -DSHOCKMPM_BENCH=OFF" \
     source "$ROOT/scripts/setup.sh"
   # the accuracy harness (label accuracy) checks numbers, not memory, and figures_smoke (label
-  # python) runs no compiled code: Release only
+  # python) checks scripts/figures.py, running the driver for one step only: Release only
   ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 SHOCKMPM_FUZZ_SECONDS=5 \
     ctest --test-dir "$ROOT/build-asan" --output-on-failure -j 1 -LE "accuracy|python"
 fi

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The accuracy harness's quick matrix still runs, and the dense errors stay under their bounds
 # (bench/accuracy.py BOUNDS, on every dense run but the linear hat: Us 2 %, wall stress 3 %, P 2 %,
-# rho 1 %, T 5 %, energy 1 %), so a regression in accuracy fails CI the way a crash does (issue 15).
+# rho 1 %, T 5 %, energy 1 %), so a regression in accuracy fails CI the way a crash does.
 #   tests/accuracy_quick.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# The compaction wave at porosity 0.09 against the fully compacted porous Hugoniot (issue 15
-# item 3): bench/compaction_hugoniot.py at h = 4 um on the 2000 um strip, 1000 and 2000 m/s;
-# front speed, stress behind the front and wall stress within 3 % (measured: within 1.7 %,
-# docs/accuracy.md). Release only (about 40 s on 2 threads).
+# The compaction wave at porosity 0.09 against the fully compacted porous Hugoniot (docs/model.md,
+# "The fully compacted porous Hugoniot"): bench/compaction_hugoniot.py at h = 4 um on the 2000 um
+# strip, 1000 and 2000 m/s; front speed, stress behind the front and wall stress within 3 %
+# (measured: within 1.7 %, docs/accuracy.md). Release only (about 40 s on 2 threads).
 #   tests/compaction_quick.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"

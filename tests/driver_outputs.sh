@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The output directory as a user meets it (issue 16): run.json's provenance; case_resolved.toml
+# The output directory as a user meets it: run.json's provenance; case_resolved.toml
 # reruns to the same result; an earlier run's
 # results are never replaced without --overwrite; --overwrite clears that run's outputs (stale
 # figures/, a killed run's .tmp files) and keeps the user's own files; a write that fails (a

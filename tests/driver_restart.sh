@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checkpoint and resume as a user meets them (issue 16): a run killed by SIGKILL at a random
+# Checkpoint and resume as a user meets them: a run killed by SIGKILL at a random
 # moment (snapshots every 1 ns, so often mid-snapshot or mid-checkpoint) and resumed at another
 # thread count ends with every output file byte for byte that of the uninterrupted run: CSV rows
 # neither duplicated nor missing, the same snapshots, XDMF index and series.h5. A SIGTERM writes a

@@ -3,11 +3,14 @@
 # series.csv with 3 regions x 5 times, front/wall/energy CSVs, fields/particles.xdmf naming two HDF5
 # snapshots, plus a stale snapshot it does not name), run the script on them and check that every
 # expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, and the
-# exit statuses (0 written, 1 nothing made, 2 bad arguments).
+# exit statuses (0 written, 1 nothing made, 2 bad arguments). series.csv's columns are the
+# engine's own: the header is read from a one-step run of the driver on the quick-start case.
 #
-# usage: tests/figures_smoke.sh [SOURCE_DIR]     (FIGURES_SMOKE_KEEP=1 keeps the temp directory)
+# usage: tests/figures_smoke.sh [SHOCKMPM [SOURCE_DIR]]   (default build/shockmpm of the source
+#        tree; FIGURES_SMOKE_KEEP=1 keeps the temp directory)
 set -euo pipefail
-ROOT="${1:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)}"
+ROOT="${2:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)}"
+EXE="${1:-$ROOT/build/shockmpm}"
 PY=/usr/bin/python3
 SCRIPT="$ROOT/scripts/figures.py"
 
@@ -23,7 +26,16 @@ else
   trap 'rm -rf "$TMP"' EXIT
 fi
 
-"$PY" - "$TMP" <<'EOF'
+# series.csv's header as the engine writes it (one step, no snapshots: well under a second)
+if ! "$EXE" run "$ROOT/cases/quickstart.toml" --quiet --threads 1 --out "$TMP/engine" \
+     --set run.max_steps=1 --set run.snapshot_interval_ns=0 >/dev/null 2>"$TMP/engine.err"; then
+  cat "$TMP/engine.err" >&2
+  echo "figures_smoke: $EXE did not run the quick-start case" >&2
+  exit 1
+fi
+SERIES_HEADER="$(head -n 1 "$TMP/engine/series.csv")"
+
+"$PY" - "$TMP" "$SERIES_HEADER" <<'EOF'
 import json, os, sys
 import h5py
 import numpy as np
@@ -43,15 +55,25 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
 
     times = [0.0, 100.0, 200.0, 300.0, 400.0]
     with open(os.path.join(outdir, "series.csv"), "w") as f:
-        f.write("time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,"
-                "Uy_mean_ms,Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,"
-                "T_skew,T_kurt,rho_skew,rho_kurt,Uy_skew,Uy_kurt\n")
+        f.write(",".join(columns) + "\n")
         for t in times:
             for k, reg in enumerate(("I", "II", "III")):
                 s = t / 400.0 / (1 + 0.3 * k) * speed / 1000.0
-                f.write(f"{t},{reg},{300 - 80 * k},{20 * s:.4f},{5 * s:.4f},{300 + 150 * s:.3f},{40 * s:.3f},"
-                        f"{1.35 + 1.3 * s:.4f},{0.2 * s:.4f},{-speed * (1 - s):.2f},{100 * s:.2f},"
-                        f"{1e-3 + 2 * s:.5g},{1e-3 + 5 * s:.5g},{1e-3 + 6 * s:.5g},0.1,0.5,0.2,1.0,-0.3,0.2,0.0,0.4\n")
+                value = {
+                    "time_ns": f"{t}", "region": reg, "count": f"{300 - 80 * k}",
+                    "P_mean_GPa": f"{20 * s:.4f}", "P_std_GPa": f"{5 * s:.4f}",
+                    "T_mean_K": f"{300 + 150 * s:.3f}", "T_std_K": f"{40 * s:.3f}",
+                    "rho_mean_gcc": f"{1.35 + 1.3 * s:.4f}", "rho_std_gcc": f"{0.2 * s:.4f}",
+                    "Uy_mean_ms": f"{-speed * (1 - s):.2f}", "Uy_std_ms": f"{100 * s:.2f}",
+                    "R2_mean_per_us2": f"{1e-3 + 2 * s:.5g}", "D2_mean_per_us2": f"{1e-3 + 5 * s:.5g}",
+                    "S2_mean_per_us2": f"{1e-3 + 6 * s:.5g}",
+                    "P_skew": "0.1", "P_kurt": "0.5", "T_skew": "0.2", "T_kurt": "1.0",
+                    "rho_skew": "-0.3", "rho_kurt": "0.2", "Uy_skew": "0.0", "Uy_kurt": "0.4",
+                    "R_mean_per_us": f"{(1e-3 + 2 * s) ** 0.5:.5g}", "D_mean_per_us": f"{(1e-3 + 5 * s) ** 0.5:.5g}",
+                    "open_porosity": f"{porosity * max(0.0, 1 - 2 * s):.4f}",
+                }
+                # a column the engine adds later gets 0 until a figure reads it
+                f.write(",".join(value.get(c, "0") for c in columns) + "\n")
     with open(os.path.join(outdir, "front.csv"), "w") as f:
         f.write("time_ns,front_y_um\n")
         for t in np.arange(0.0, 501.0, 20.0):
@@ -124,6 +146,11 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
                 + grids + "    </Grid>\n  </Domain>\n</Xdmf>\n")
 
 tmp = sys.argv[1]
+columns = sys.argv[2].strip().split(",")
+need = {"time_ns", "region", "P_mean_GPa", "P_std_GPa", "T_mean_K", "rho_mean_gcc", "Uy_mean_ms",
+        "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2"}
+if not need <= set(columns):
+    sys.exit(f"figures_smoke: the engine's series.csv header lacks {sorted(need - set(columns))}: {columns}")
 make(os.path.join(tmp, "a"), "smoke_a", 0.50, 1000.0)
 make(os.path.join(tmp, "b"), "smoke_b", 0.41, 800.0, with_T=False, with_wall=False)
 os.makedirs(os.path.join(tmp, "empty"))

@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# Issue 14's porous strip at h = 4 um (cases/verify/porous_strip.toml, 200 ns, about 1.3 s):
-# bench/porous_convergence.py --check asserts what one run shows of the issue's acceptance:
-# open porosity behind the front within 2 % (measured 1.1 % since session 21; 2.0 % before the
-# closed-void passes), under 5 % of band III at zero pressure (1.7 %; 13 % before), the
+# The porous strip at h = 4 um (cases/verify/porous_strip.toml, 200 ns, about 1.3 s):
+# bench/porous_convergence.py --check asserts what one run can show: open porosity behind the
+# front within 2 % (measured 1.1 %; 2.0 % without the closed-void passes), under 5 % of band III
+# at zero pressure (1.7 %; 13 % without them), the
 # compaction front within 5 % of the fully compacted Rankine-Hugoniot front of the code's EOS at
 # the porosity the front swept (+1.1 %; -4.3 % against the nominal porosity's), energy within
 # 1e-8 (1.5e-10).
 # Then the same strip with voids of 5 um (1.25 cells of radius) and four void-face velocity
-# fields (contact.void_face_fields = 4, session 22): -3.0 % against the swept Hugoniot, open
-# porosity -1.3 % (with two fields: +27 % and 7.5 %; docs/method.md, "Four void-face fields").
+# fields (contact.void_face_fields = 4): -3.0 % against the swept Hugoniot, open porosity
+# -1.3 % (with two fields: +27 % and 7.5 %; docs/method.md).
 # The convergence figures (h = 2, 1) are long runs: docs/verification.md. Release only.
 #   tests/strip_closure.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail

@@ -282,7 +282,7 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
   CHECK_THROWS_WITH(build({"contact.void_faces=\"single_field\"", "contact.void_face_volume_fraction=0.9"}),
                     Catch::Contains("applies with contact.void_faces = \"separate\" only"));
   CHECK_THROWS_WITH(build({"contact.void_faces=\"separte\""}), Catch::Contains("'separate', 'single_field'"));
-  // the closed-void passes (docs/method.md, "Closed voids"): on by default, off by key
+  // the closed-void passes (docs/method.md): on by default, off by key
   CHECK(build({}).solver.void_face_merge);
   CHECK(build({}).solver.crack_closure);
   CHECK_FALSE(build({"contact.void_face_merge=false"}).solver.void_face_merge);
@@ -292,7 +292,7 @@ TEST_CASE("void-face keys: clear errors", "[case]") {
   CHECK_THROWS_WITH(build({"solver.crack_closure=1"}), Catch::Contains("crack_closure"));
   CHECK_THROWS_WITH(build({"contact.void_face_volume_fraction=3"}), Catch::Contains("allowed 0.1 to 2"));
   CHECK_THROWS_WITH(build({"solver.scheme=\"musl\"", "contact.void_faces=\"separate\""}),
-                    Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));  // four void-face fields (session 22): 2 by default, 4 on request, nothing else; APIC only
+                    Catch::Contains("'separate' runs with solver.scheme = \"usl\" only"));  // four void-face fields: 2 by default, 4 on request, nothing else; APIC only
   CHECK(build({}).solver.void_face_fields == 2);
   CHECK(build({"contact.void_face_fields=4"}).solver.void_face_fields == 4);
   CHECK(build({"contact.void_face_fields=4"}).solver.fields() == 4);
@@ -320,7 +320,7 @@ TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear err
   };
   CHECK(sim_for("dense_impact_1000.toml", {}).midstep());
   CHECK_FALSE(sim_for("dense_impact_1000.toml", {"solver.strain_rate=\"updated\""}).midstep());
-  // FLIP and uGIMP: mid-step by default since session 19 (the kinematics take the updated L);
+  // FLIP and uGIMP: mid-step by default (the kinematics take the updated L);
   // the linear hat: updated by default (the dense Hugoniot, docs/accuracy.md), mid-step on request
   CHECK(sim_for("dense_impact_1000.toml", {"solver.transfer=\"flip\""}).midstep());
   CHECK(sim_for("dense_impact_1000.toml", {"solver.shape=\"ugimp\""}).midstep());
@@ -333,9 +333,9 @@ TEST_CASE("strain_rate: mid-step where the heating gather runs, else a clear err
                     Catch::Contains("'midstep' needs scheme 'usl' and an energy field"));
 }
 
-// Issue 16: sizes are checked before anything is allocated, and no input loops without end.
-// Each case here failed late or never before (a std::bad_alloc naming no key, a loop drawing
-// voids that remove no point, 21 GB of snapshots without a word).
+// Sizes are checked before anything is allocated, and no input loops without end. Unchecked,
+// each case here would fail late or never (a std::bad_alloc naming no key, a loop drawing voids
+// that remove no point, 21 GB of snapshots without a word).
 TEST_CASE("sizes checked before allocation: memory, voids, output", "[case]") {
   auto voids = [](std::vector<std::string> sets) {
     auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/porous_strip.toml");
@@ -363,7 +363,7 @@ TEST_CASE("sizes checked before allocation: memory, voids, output", "[case]") {
   CHECK(voids({}) == "");
 }
 
-// Issue 16: a typo'd key is named as the unknown key it is, with the spelling meant (also when
+// A typo'd key is named as the unknown key it is, with the spelling meant (also when
 // the key it misspells is required); a value of the wrong type is shown as written.
 TEST_CASE("typos: the unknown key and the spelling meant; wrong types show the value", "[case]") {
   CHECK(has(error_of({"solver.shap=\"cubic\""}), "unknown key 'shap' in [solver]; did you mean 'shape'?"));

@@ -1,5 +1,5 @@
 // Verification of the elastic MPM core against exact or published answers
-// (../shared/physics.md section 7), and bitwise determinism across thread counts.
+// (docs/model.md, "Exact checks"), and bitwise determinism across thread counts.
 #include <catch2/catch.hpp>
 #include <omp.h>
 

@@ -1,5 +1,5 @@
-// A mutation fuzzer over the case reader, the scene builder and the simulation's set-up (issue
-// 16, item 8). Seeds: the repo's case files. Each input is one seed with 1-3 random mutations
+// A mutation fuzzer over the case reader, the scene builder and the simulation's set-up.
+// Seeds: the repo's case files. Each input is one seed with 1-3 random mutations
 // (delete a key, rename it with a typo, give it a value of another type, a huge, tiny, zero,
 // negative, NaN or infinite number, a wrong-sized array, a nested table). Every input must end
 // in a built scene or a CaseError (exit 2 in the driver) within a second: any other exception,

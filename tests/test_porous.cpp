@@ -103,19 +103,17 @@ TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verificat
   WARN("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
   CHECK(finite);
   // Kinetic + internal energy: the step conserves it (mid-step strain rate, old-stress work;
-  // the transfers', the welds' and the wall's losses heat the points: docs/method.md, "Energy").
-  // It drifted down 3.2-4.1 % here before; now round-off (measured 1e-12). Bound at 0.5 %,
-  // issue 14's acceptance figure.
+  // the transfers', the welds' and the wall's losses heat the points: docs/method.md).
+  // Measured: round-off (1e-12). Bound at 0.5 %, the figure the porous runs must meet.
   CHECK(sim.midstep());
   CHECK(worst < 0.005);
 }
 
 // A porous body in free flight is at rest in its own frame: nothing may grow out of round-off.
-// With the mid-step strain rate in the kinematics too (before session 19), the strip below
-// reached 4.3e5 Pa at 80 ns and 4.8e8 Pa at 160 ns in its thin ligaments, and the study's runs
-// carried 0.5-0.9 GPa of noise in the material ahead of the compaction front (docs/method.md,
-// "The mid-step instability"). Now the kinematics take the updated L, the energy the mid-step
-// work: measured 1e-4 Pa and 1e-12 m/s.
+// With the mid-step strain rate in the kinematics too, the strip below reaches 4.3e5 Pa at
+// 80 ns and 4.8e8 Pa at 160 ns in its thin ligaments, and the study's runs carry 0.5-0.9 GPa
+// of noise in the material ahead of the compaction front (docs/method.md). The kinematics
+// take the updated L, the energy the mid-step work: measured 1e-4 Pa and 1e-12 m/s.
 TEST_CASE("a porous body in free flight keeps its round-off (mid-step energy, updated kinematics)",
           "[verification][porous][stability]") {
   auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/porous_strip.toml");
@@ -186,13 +184,13 @@ TEST_CASE("void sides, four fields: the faces across and along the impact direct
   CHECK_THROWS_AS(assign_void_sides(P, {{0.0, 0.0, 1.0}}, 0.0, 1.0, 3.0, 0.0, 3), std::invalid_argument);
 }
 
-// Issue 14's single-void acceptance test: a void of radius 10 um in dense Al shocked at
+// The single-void test: a void of radius 10 um in dense Al shocked at
 // 1000 m/s onto the wall, h = 4 um (2 x 2 points per cell), at 20 ns (collapsed by about 13 ns).
 // Open area measured here (pixels of a quarter point spacing): one velocity field 17.0 % of the
 // initial void (the faces stop a cell apart), two fields welded where they meet 2.8 % (3.4 % with
-// the weld at 0.8, the default until session 14). What remains is open space between points
+// the weld at 0.8 instead of the default 0.9). What remains is open space between points
 // scattered by the jet, not a cell-wide gap (by volume the void is closed, bench/void_open_area.py);
-// issue 14's 1 % is not reached by this pixel measure (docs/verification.md). Bounds: 8 % and 5 %.
+// 1 % is not reached by this pixel measure (docs/verification.md). Bounds: 8 % and 5 %.
 TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][porous]") {
   auto run = [](const std::string& mode) {
     auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/void_collapse.toml");
@@ -214,18 +212,19 @@ TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][p
   const auto [single, dE1] = run("single_field");
   const auto [separate, dE2] = run("separate");
   CHECK(single > 0.08);
-  CHECK(separate < 0.05);  // issue 14 asks for 1 %: not reached, see the comment above
+  CHECK(separate < 0.05);  // 1 % is not reached by this measure, see the comment above
   CHECK(std::fabs(dE1) < 1e-6);
   CHECK(std::fabs(dE2) < 1e-6);
 }
 
-// Issue 14's energy acceptance beyond the quadratic case: kinetic plus internal energy closes
+// The porous energy balance beyond the quadratic case: kinetic plus internal energy closes
 // (mid-step strain rate, heat from transfers, welds and the wall) for the cubic B-spline and
 // uGIMP, for voids of radius 2 cells, and for the symmetric two-body collision at +-2000 m/s
 // (no wall: the impact plane is a symmetry plane), with APIC and with FLIP (uGIMP and FLIP with
-// the mid-step strain rate asked for: their default is the updated one, docs/accuracy.md). Measured over the full 100 ns with the
-// driver: 1e-10 relative or better in each (docs/verification.md); run here for 10 ns (the
-// balance is exact per step; FLIP cubic measured with the driver only).
+// the mid-step strain rate asked for by key; solver.strain_rate = "auto" picks it too,
+// docs/accuracy.md). Measured over the full 100 ns with the driver: 1e-10 relative or better in
+// each (docs/verification.md); run here for 10 ns (the balance is exact per step; FLIP cubic
+// measured with the driver only).
 TEST_CASE("porous energy closes: cubic, uGIMP, small voids, symmetric 2000 m/s, FLIP", "[verification][porous]") {
   struct Variant {
     const char* file;

@@ -1,5 +1,5 @@
 // Dense symmetric impact (rigid-wall half model) against the exact jump conditions of the
-// code's own Hugoniot (physics.md section 7), run from the case files in cases/verify/.
+// code's own Hugoniot (docs/model.md, "Exact checks"), run from the case files in cases/verify/.
 #include <catch2/catch.hpp>
 
 #include <cmath>

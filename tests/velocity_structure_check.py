@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Checks of bench/velocity_structure.py (issue 14's evidence that <D^2> follows the cell size).
+"""Checks of bench/velocity_structure.py (the evidence that <D^2> follows the cell size).
 
 Unit part, on synthetic pixel fields with a known structure function:
 - a linear shear u = (a y, 0): x shifts see 0, y shifts (a r)^2, so S2(k) is their mean weighted by
