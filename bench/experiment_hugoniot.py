@@ -1,0 +1,741 @@
+#!/usr/bin/python3
+"""The engine against measured porous Hugoniots: one run per row of a data file, seed and cell size.
+
+  /usr/bin/python3 bench/experiment_hugoniot.py [--data bench/data/porous_iron_hugoniot.csv]
+      [--out DIR] [--dim 2] [--h 4,2] [--seeds 3] [--void-radius-um 10] [--material iron]
+      [--rows 0,3] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
+      [--quick] [--check PCT] [--dry-run]
+
+The data file: CSV, comment lines start with '#', columns
+  m            distention rho_solid / rho00 [-] (porosity 1 - 1/m)
+  rho00_g_cm3  initial bulk density [g/cm^3]
+  up_km_s      particle velocity behind the shock [km/s]
+  Us_km_s      shock velocity [km/s]
+  P_GPa        pressure behind the shock [GPa] (rho00 Us up)
+  rho_g_cm3    density behind the shock [g/cm^3] (rho00 Us / (Us - up))
+  source       where the row comes from (text)
+Any file with these columns runs; a missing column or a bad value is an error naming it.
+
+Per row, seed (1..--seeds) and cell size (--h), a case is written to DIR/cases/ and run:
+  sample   a strip periodic in x (width 6 void diameters, --width-diameters, rounded up to a
+           multiple of every h) on a frictionless (slip) wall at y = 0, which holds the normal
+           velocity at zero, pulling as well as pushing, as the symmetry plane does; free top;
+           moving at -up onto the wall; porosity 1 - 1/m of the material's dense density
+           (random overlapping voids of --void-radius-um, `voids.porosity`, seed = the seed
+           number), points_per_cell 2, quadratic APIC, USL, cfl 0.3, artificial viscosity on (as
+           cases/verify/porous_strip.toml). The material is `[materials.sample] base =
+           "<--material>"` from the repository's cases/materials.toml; --set overrides reach it
+           as materials.sample.KEY=VALUE. Where the library's dense density differs from the
+           row's rho00 x m by more than 0.1 %, the outputs say so (the porosity follows m; the
+           engine's rho00 is then rho0 / m, not the row's).
+  frames   the wall is the symmetry plane of a symmetric impact: in the wall frame the unshocked
+           sample moves at -up (towards the wall), the shocked material is at rest and the front
+           runs up at U (front.csv). The experiment's frame is the unshocked sample's: add +up
+           to every velocity. There the unshocked sample is at rest, the shocked material moves
+           at +up (the way the shock runs) and the front at Us = U + up. The same holds for the
+           fully compacted Hugoniot: Us_c = run.json compacted_hugoniot.front_speed_wall_frame_m_s
+           + up (its Us_m_s, checked equal).
+  size     per row, once (every seed and h of a row run the same strip and end time): `check` of
+           the case at the coarsest h gives the compacted Hugoniot's wall-frame front speed U_c;
+           the end time is the time a front at U_c takes to run FRONT = 15 void diameters
+           (--front-diameters), t_end = FRONT / U_c; the strip is high enough that a front 1.5x
+           as fast (the measured fronts of bench/data/porous_iron_hugoniot.csv run at up to 1.32x
+           U_c in the wall frame, distention 2.91 at 0.646 km/s) stays 2 void diameters below the
+           free top, which comes down at up: height = 1.5 FRONT + up t_end + 4 r (rounded up to a
+           multiple of every h).
+  measure  front speed U: least squares of front.csv (in rows of h from the top, where the mean
+           v_y first differs from -up by up/2) over 0.3-0.95 of t_end, cut where the front comes
+           within 2 void diameters of the free top (the window used is in experiment.json);
+           Us = U + up. The front is fitted, not the momentum the wall takes up: the compacted
+           slab behind the front rings between the wall and the front (in the iron rows at
+           h = 4 um its mean velocity swings by up to about 0.2 up over tens of ns), which moves
+           the front by a few um but the slab's momentum by a large part of what the front takes
+           in over one swing. Behind the front: the points between 0.1 and 0.8 of the front's
+           height, over the snapshots of the second half of the run (the shocked state, averaged
+           over its ringing): mean -sigma_yy (the longitudinal stress, what rho00 Us up
+           measures) and mean pressure [GPa], bulk density (their mass over the band's area: pores
+           left open count) and the points' own mean density [g/cm^3], mean U_y [m/s] (0 in the
+           wall frame when the state is the shocked one) and T [K]. The jump conditions with the
+           engine's Us give P = rho00 Us up and rho = rho00 Us / (Us - up), as the rows do; and
+           mass conservation with the bulk density behind gives Us = up rho_b / (rho_b - rho00),
+           equal to the fitted Us for a steady single front.
+  per row  at each h the engine's Us as mean and spread (sample standard deviation) over seeds;
+           the resolution change |Us(h1) - Us(h2)| / Us(h2) between the two finest h (converged
+           when within 3 %); errors (engine / measured - 1) of the finest h's mean and of the
+           compacted Hugoniot's Us (mean over the finest h's seeds: each sample's own porosity).
+
+Outputs: DIR/experiment.json (per row all of the above, every run, the command line and the
+driver's git commit from a run.json provenance), DIR/experiment.md (the table, then the mean and
+the worst |Us error| of the engine and of the compacted Hugoniot), DIR/experiment_us_up.png (Us
+against up: measured points, the engine with error bars, the compacted Hugoniot; one colour per
+distention). Runs are cached under DIR/runs/<key> (key: the case text, the overrides and the
+driver binary's hash): a rerun only runs what changed. A failed run is reported, the rest go on,
+and the exit status is 1.
+
+--quick: one row (the first, or the first of --rows), one seed, the coarsest h. --check PCT: exit 1
+when a row's |Us error| against its measured Us exceeds PCT per cent (tests/experiment_quick.sh).
+--dry-run: print the planned runs (strip, end time, particles, steps) and run nothing.
+"""
+import argparse
+import csv
+import glob
+import hashlib
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+MATERIALS = os.path.join(ROOT, "cases", "materials.toml")
+COLUMNS = ["m", "rho00_g_cm3", "up_km_s", "Us_km_s", "P_GPa", "rho_g_cm3", "source"]
+CONVERGED_PCT = 3.0          # the issue's second-resolution criterion
+FAST = 1.5                   # the fastest wall-frame front the strip's height allows, over U_c
+TOP_GAP_DIAMETERS = 2.0      # the fit stops where the front comes this close to the free top
+WINDOW = (0.3, 0.95)         # fit window [fractions of t_end]
+BAND = (0.1, 0.8)            # the shocked band [fractions of the front's height]
+DENSITY_NOTE_PCT = 0.1       # library rho0 against rho00 x m (the rows' rounding is under 0.05 %)
+
+
+class DataError(Exception):
+    pass
+
+
+def read_data(path):
+    """The data rows as dicts of floats (source: text). Raises DataError naming the file, line and
+    column of a missing column or a bad value."""
+    try:
+        with open(path, newline="") as f:
+            lines = [(n, l) for n, l in enumerate(f, 1) if l.strip() and not l.lstrip().startswith("#")]
+    except OSError as e:
+        raise DataError(f"{path}: cannot read the data file ({e.strerror})")
+    if not lines:
+        raise DataError(f"{path}: no header line (only comments or empty)")
+    reader = csv.reader([l for _, l in lines])
+    header = [c.strip() for c in next(reader)]
+    missing = [c for c in COLUMNS if c not in header]
+    if missing:
+        raise DataError(f"{path} line {lines[0][0]}: missing column(s) {', '.join(missing)} "
+                        f"(needs {', '.join(COLUMNS)}; has {', '.join(header)})")
+    rows = []
+    for (n, _), vals in zip(lines[1:], reader):
+        if len(vals) != len(header):
+            raise DataError(f"{path} line {n}: {len(vals)} values for {len(header)} columns")
+        rec = dict(zip(header, [v.strip() for v in vals]))
+        row = {"line": n, "source": rec["source"]}
+        for c in COLUMNS[:-1]:
+            try:
+                x = float(rec[c])
+            except ValueError:
+                raise DataError(f"{path} line {n}: column {c} = {rec[c]!r} is not a number")
+            if not math.isfinite(x):
+                raise DataError(f"{path} line {n}: column {c} = {rec[c]!r} is not finite")
+            row[c] = x
+        for c, ok, why in (("m", row["m"] >= 1.0, "a distention is at least 1"),
+                           ("rho00_g_cm3", row["rho00_g_cm3"] > 0.0, "must be positive"),
+                           ("up_km_s", row["up_km_s"] > 0.0, "must be positive"),
+                           ("Us_km_s", row["Us_km_s"] > row["up_km_s"], "must exceed up_km_s")):
+            if not ok:
+                raise DataError(f"{path} line {n}: column {c} = {rec[c]!r}: {why}")
+        rows.append(row)
+    if not rows:
+        raise DataError(f"{path}: no data rows")
+    return rows
+
+
+def parse_list(text, kind, name):
+    try:
+        vals = [kind(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise DataError(f"{name} {text!r}: expected a comma-separated list of numbers")
+    if not vals:
+        raise DataError(f"{name} {text!r}: empty")
+    return vals
+
+
+def common_step(hs):
+    """The smallest multiple of the largest h [um] that every h divides (geometry shared by all
+    resolutions)."""
+    H = max(hs)
+    for k in range(1, 65):
+        if all(abs(k * H / h - round(k * H / h)) < 1e-9 for h in hs):
+            return k * H
+    raise DataError(f"--h {','.join(f'{h:g}' for h in hs)}: no common multiple of the cell sizes "
+                    "within 64 x the largest")
+
+
+def round_up(x, step):
+    return math.ceil(x / step - 1e-9) * step
+
+
+def toml_num(x):
+    return repr(float(x))
+
+
+def case_text(row, idx, a, h, seed, width, height, t_end):
+    phi = 1.0 - 1.0 / row["m"]
+    top = round_up(height + 20.0, h)
+    voids = ""
+    if phi > 0.0:
+        voids = (f"\n[bodies.voids]\nradius_um = {toml_num(a.void_radius_um)}\n"
+                 f"porosity = {phi:.6f}   # 1 - 1/m, m = {row['m']:g}\nseed = {seed}\n")
+    return f"""# bench/experiment_hugoniot.py: data row {idx} ({os.path.basename(a.data)} line {row['line']}:
+# m {row['m']:g}, up {row['up_km_s']:g} km/s, measured Us {row['Us_km_s']:g} km/s; {row['source']}),
+# h {h:g} um, seed {seed}. A strip periodic in x, porous sample moving at -up onto the slip wall
+# at y = 0 (the symmetry plane of a symmetric impact), free top.
+materials_file = "{MATERIALS}"
+
+[run]
+end_time_ns = {t_end:.3f}
+snapshot_interval_ns = {t_end / 8.0:.4f}
+diagnostics_interval_ns = {t_end / 250.0:.4f}
+
+[grid]
+cell_size_um = {toml_num(h)}
+x_range_um = [0.0, {toml_num(width)}]
+y_range_um = [0.0, {toml_num(top)}]
+periodic_x = true
+
+[solver]
+shape = "quadratic"
+transfer = "apic"
+scheme = "usl"
+cfl = 0.3
+artificial_viscosity = true
+
+[walls]
+bottom = "slip"
+
+[materials.sample]
+base = "{a.material}"
+
+[[bodies]]
+name = "target"
+material = "sample"
+x_range_um = [0.0, {toml_num(width)}]
+y_range_um = [0.0, {toml_num(height)}]
+velocity_m_s = [0.0, {-row['up_km_s'] * 1e3!r}]
+points_per_cell = 2
+{voids}"""
+
+
+def set_args(a):
+    out = []
+    for kv in a.set:
+        out += ["--set", kv]
+    return out
+
+
+def driver_check(a, path):
+    """`check` of a case: (the compacted Hugoniot's wall-frame front [m/s], the dense one's for a
+    sample without voids, or nan; particles; steps; stderr)."""
+    chk = subprocess.run([a.driver, "check", path] + set_args(a), capture_output=True, text=True)
+    front, dense, parts, steps = math.nan, math.nan, 0, 0
+    for l in chk.stdout.splitlines():
+        if "fully compacted" in l and "front " in l:
+            front = float(l.split("front ")[1].split(" m/s")[0])
+        md = re.search(r"stopped from ([0-9.eE+-]+) m/s \(dense Hugoniot\): Us ([0-9.eE+-]+) m/s", l)
+        if md:
+            dense = float(md.group(2)) - float(md.group(1))  # a dense sample (m = 1): its own front
+    if not math.isfinite(front):
+        front = dense
+        mp = re.match(r"\s*particles\s+(\d+)", l)
+        if mp:
+            parts = int(mp.group(1))
+        ms = re.search(r"about (\d+) steps", l)
+        if ms:
+            steps = int(ms.group(1))
+    return front, parts, steps, (chk.stderr.strip() if chk.returncode else "")
+
+
+def size_row(a, row, idx, width):
+    """(height [um], t_end [ns], U_c [m/s]) of a row's strip, from `check` at the coarsest h."""
+    r, up = a.void_radius_um, row["up_km_s"]  # km/s = um/ns
+    front = a.front_diameters * 2.0 * r
+    path = os.path.join(a.out, "cases", f"row{idx}-sizing.toml")
+    t_guess = 100.0
+    with open(path, "w") as f:
+        f.write(case_text(row, idx, a, max(a.hs), 1, width, round_up(front * FAST + 4 * r, a.step), t_guess))
+    uc, _, _, err = driver_check(a, path)
+    if not math.isfinite(uc) or uc <= 0.0:
+        raise DataError(f"row {idx}: no fully compacted Hugoniot from `{a.driver} check {path}`"
+                        + (f": {err}" if err else ""))
+    t_end = front / (uc * 1e-3)
+    height = round_up(FAST * front + up * t_end + 4.0 * r, a.step)
+    return height, t_end, uc
+
+
+_DRIVER_HASH = {}
+
+
+def run_key(driver, text, sets):
+    if driver not in _DRIVER_HASH:
+        with open(driver, "rb") as f:
+            _DRIVER_HASH[driver] = hashlib.sha1(f.read()).hexdigest()
+    return hashlib.sha1((_DRIVER_HASH[driver] + "|" + text + "|" + "|".join(sets)).encode()).hexdigest()[:16]
+
+
+def completed(out):
+    try:
+        return json.load(open(os.path.join(out, "run.json"))).get("status") == "completed"
+    except (OSError, ValueError):
+        return False
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def measure(out, up_km_s, t_end, height, r):
+    """The run's front and state behind it (see the module's docstring). Raises on a run that
+    cannot be measured, with the reason."""
+    run = json.load(open(os.path.join(out, "run.json")))
+    if run.get("status") != "completed":
+        raise ValueError(f"run status {run.get('status')!r}: {run.get('message', '')}")
+    if float(run["end_time_s"]) * 1e9 < 0.999 * t_end:
+        raise ValueError(f"the run stopped at {float(run['end_time_s']) * 1e9:.1f} ns of {t_end:.1f} ns: "
+                         f"{run.get('message', '')}")
+    body = run["bodies"][0]
+    c = body.get("compacted_hugoniot")
+    if c is None and "dense_hugoniot" in body and float(body["porosity"]) == 0.0:
+        d = body["dense_hugoniot"]  # no voids (m = 1): the compacted Hugoniot is the dense one
+        c = {"front_speed_wall_frame_m_s": float(d["Us_m_s"]) - float(d["up_m_s"]), "Us_m_s": d["Us_m_s"],
+             "P_Pa": d["P_Pa"], "rho_kg_m3": d["rho_kg_m3"]}
+    mat = run["case_resolved"]["materials"][body["material"]]
+    rho0 = float(mat["density_kg_m3"])
+    up = up_km_s * 1e3
+    fr = read_csv(os.path.join(out, "front.csv"))
+    t = np.array([float(x["time_ns"]) for x in fr])
+    y = np.array([float(x["front_y_um"]) for x in fr])
+    ok = np.isfinite(t) & np.isfinite(y)
+    t, y = t[ok], y[ok]
+    top = height - up_km_s * t  # the free top [um], coming down at up
+    sel = (t >= WINDOW[0] * t_end) & (t <= WINDOW[1] * t_end)
+    cut = sel & (y > top - TOP_GAP_DIAMETERS * 2.0 * r)
+    sel &= ~cut
+    if sel.sum() < 5:
+        raise ValueError(f"{int(sel.sum())} front.csv rows in the fit window (need 5)"
+                         + (" (the front reached the free top: strip too short)" if cut.any() else ""))
+    (slope, icpt), cov = np.polyfit(t[sel], y[sel], 1, cov=True)
+    U = float(slope) * 1e3  # um/ns -> m/s
+    res = {"front_wall_frame_m_s": U, "front_fit_std_m_s": float(math.sqrt(cov[0][0])) * 1e3,
+           "Us_km_s": (U + up) * 1e-3,
+           "window_ns": [float(t[sel][0]), float(t[sel][-1])],
+           "window_front_um": [float(y[sel][0]), float(y[sel][-1])],
+           "window_cut_at_top": bool(cut.any()),
+           "porosity": float(body["porosity"]), "voids": int(body.get("voids", 0)),
+           "particles": int(run["particles"]), "steps": int(run["steps"]),
+           "wall_seconds": float(run["wall_seconds"]), "threads": int(run.get("threads", 0)),
+           "rho0_library_g_cm3": rho0 * 1e-3,
+           "git_commit": run.get("provenance", {}).get("git_commit", ""),
+           "git_dirty": run.get("provenance", {}).get("git_dirty", "")}
+    res["m_sample"] = 1.0 / (1.0 - res["porosity"])
+    rho00 = rho0 * (1.0 - res["porosity"])
+    res["rho00_engine_g_cm3"] = rho00 * 1e-3
+    Us = U + up
+    res["P_jump_GPa"] = rho00 * Us * up * 1e-9
+    res["rho_jump_g_cm3"] = rho00 * Us / U * 1e-3 if U > 0 else math.nan
+    if c is not None:
+        res["compacted_front_wall_frame_m_s"] = float(c["front_speed_wall_frame_m_s"])
+        res["compacted_Us_km_s"] = (float(c["front_speed_wall_frame_m_s"]) + up) * 1e-3
+        if abs(float(c["Us_m_s"]) - (float(c["front_speed_wall_frame_m_s"]) + up)) > 1e-6 * float(c["Us_m_s"]) + 1e-3:
+            raise ValueError("run.json compacted_hugoniot: Us_m_s is not front_speed_wall_frame_m_s + up")
+        res["compacted_P_GPa"] = float(c["P_Pa"]) * 1e-9
+        res["compacted_rho_g_cm3"] = float(c["rho_kg_m3"]) * 1e-3
+    # the shocked band, over the snapshots of the second half
+    import h5py
+    gx = run["case_resolved"]["grid"]["x_range_um"]
+    width = (gx[1] - gx[0]) * 1e-6
+    mass = rho0 * float(body["area_m2"]) / int(body["particles"])  # per point [kg/m]: a lattice sample
+    acc = {k: [] for k in ("P_long_GPa", "p_GPa", "rho_bulk_g_cm3", "rho_points_g_cm3", "Uy_m_s", "T_K")}
+    for snap in sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5"))):
+        with h5py.File(snap, "r") as f:
+            ts = float(f["particles"].attrs["time"]) * 1e9
+            if ts < 0.5 * t_end:
+                continue
+            yy = f["particles/position"][:, 1] * 1e6
+            yf = float(np.interp(ts, t, y))
+            lo, hi = BAND[0] * yf, BAND[1] * yf
+            m = (yy >= lo) & (yy <= hi) & (f["particles/body"][:] == 0)
+            if m.sum() < 10:
+                continue
+            acc["P_long_GPa"].append(-float(f["particles/stress_yy"][:][m].mean()) * 1e-9)
+            acc["p_GPa"].append(float(f["particles/pressure"][:][m].mean()) * 1e-9)
+            acc["rho_points_g_cm3"].append(float(f["particles/density"][:][m].mean()) * 1e-3)
+            acc["rho_bulk_g_cm3"].append(int(m.sum()) * mass / (width * (hi - lo) * 1e-6) * 1e-3)
+            acc["Uy_m_s"].append(float(f["particles/velocity"][:, 1][m].mean()))
+            acc["T_K"].append(float(f["particles/temperature"][:][m].mean()))
+    res["behind_snapshots"] = len(acc["P_long_GPa"])
+    for k, v in acc.items():
+        res["behind_" + k] = float(np.mean(v)) if v else math.nan
+    # the Us that mass conservation gives for the bulk density behind (a steady wave, the material
+    # behind at rest): Us = up rho_b / (rho_b - rho00); it equals the fitted Us only for a steady
+    # single front
+    rb = res["behind_rho_bulk_g_cm3"] * 1e3
+    res["Us_mass_balance_km_s"] = up * rb / (rb - rho00) * 1e-3 if rb > rho00 else math.nan
+    return res
+
+
+def mean_std(xs):
+    xs = [x for x in xs if x is not None and math.isfinite(x)]
+    if not xs:
+        return math.nan, math.nan
+    return float(np.mean(xs)), (float(np.std(xs, ddof=1)) if len(xs) > 1 else math.nan)
+
+
+def fmt(x, f="{:.3f}"):
+    return "n/a" if x is None or not math.isfinite(x) else f.format(x)
+
+
+def pct(x):
+    return "n/a" if x is None or not math.isfinite(x) else f"{x:+.1f} %"
+
+
+def clean(o):
+    """JSON without NaN (null instead)."""
+    if isinstance(o, float):
+        return o if math.isfinite(o) else None
+    if isinstance(o, dict):
+        return {k: clean(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [clean(v) for v in o]
+    return o
+
+
+def write_markdown(path, doc):
+    hs = doc["h_um"]
+    fine = f"{hs[-1]:g}"
+    L = []
+    L.append("# Porous Hugoniot: engine against measurements\n")
+    L.append(f"Data: `{doc['data']}`; material `{doc['material']}`"
+             + (f" with {', '.join('`' + s + '`' for s in doc['sets'])}" if doc["sets"] else "")
+             + f"; voids of radius {doc['void_radius_um']:g} um; h = {', '.join(f'{h:g}' for h in hs)} um; "
+             f"{doc['seeds']} seed(s); {doc['dim']}D plane strain. Engine commit {doc['git_commit'] or 'n/a'}"
+             + (" (dirty)" if doc.get("git_dirty") == "true" else "") + ".\n")
+    L.append(f"Command: `{doc['command']}`\n")
+    L.append(f"Us in the frame of the unshocked sample (the wall-frame front speed + up). Engine Us: mean "
+             f"+- sample standard deviation over seeds at h = {fine} um; resolution change "
+             f"|Us(h1) - Us(h2)| / Us(h2) between the two finest h (converged within {CONVERGED_PCT:g} %: "
+             f"yes / no); compacted: the fully compacted Rankine-Hugoniot Us of the same EOS at each "
+             f"sample's porosity (no strength, fully dense behind the front). Errors: model / measured - 1.\n")
+    L.append("| row | m | up [km/s] | measured Us [km/s] | engine Us [km/s] | resolution change | "
+             "compacted Us [km/s] | engine error | compacted error |")
+    L.append("|---|---|---|---|---|---|---|---|---|")
+    for r in doc["rows"]:
+        res = r["resolution_change_pct"]
+        rc = "n/a" if res is None else f"{res:.1f} % ({'yes' if res <= CONVERGED_PCT else 'no'})"
+        spread = r["engine_Us_spread_km_s"]
+        eng = fmt(r["engine_Us_km_s"]) + ("" if spread is None else f" +- {spread:.3f}")
+        L.append(f"| {r['index']} | {r['m']:g} | {r['up_km_s']:g} | {r['Us_km_s']:g} | {eng} | {rc} | "
+                 f"{fmt(r['compacted_Us_km_s'])} | {pct(r['engine_error_pct'])} | {pct(r['compacted_error_pct'])} |")
+    s = doc["summary"]
+    L.append("")
+    L.append(f"Mean |Us error|: engine {fmt(s['engine_mean_abs_error_pct'], '{:.1f} %')}, compacted Hugoniot "
+             f"{fmt(s['compacted_mean_abs_error_pct'], '{:.1f} %')}. Worst: engine "
+             f"{fmt(s['engine_worst_abs_error_pct'], '{:.1f} %')} (row {s['engine_worst_row']}), compacted "
+             f"{fmt(s['compacted_worst_abs_error_pct'], '{:.1f} %')} (row {s['compacted_worst_row']}). "
+             f"Rows with every run measured: {s['rows_complete']} of {len(doc['rows'])}.\n")
+    L.append(f"State behind the front at h = {fine} um (seed means): measured P and rho from the row; the "
+             "engine's from the jump conditions with its Us (P = rho00 Us up, rho = rho00 Us / (Us - up)) and "
+             "measured behind the front (longitudinal stress -sigma_yy; bulk density with the pores left open, "
+             "and the points' own density); the compacted Hugoniot's. Us from rho bulk behind: "
+             "up rho_b / (rho_b - rho00), what mass conservation gives for that density (a steady single "
+             "front, the material behind at rest): where it differs from the fitted Us, the wave is not one "
+             "steady front over the fit window.\n")
+    L.append("| row | P measured [GPa] | P jump | -sigma_yy behind | P compacted | "
+             "rho measured [g/cm^3] | rho jump | rho bulk behind | rho of the points | rho compacted | "
+             "Us from rho bulk behind [km/s] | porosity (target / sample) |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in doc["rows"]:
+        b = r["behind"]
+        L.append(f"| {r['index']} | {r['P_GPa']:g} | {fmt(b['P_jump_GPa'], '{:.2f}')} | "
+                 f"{fmt(b['behind_P_long_GPa'], '{:.2f}')} | {fmt(b['compacted_P_GPa'], '{:.2f}')} | "
+                 f"{r['rho_g_cm3']:g} | {fmt(b['rho_jump_g_cm3'])} | {fmt(b['behind_rho_bulk_g_cm3'])} | "
+                 f"{fmt(b['behind_rho_points_g_cm3'])} | {fmt(b['compacted_rho_g_cm3'])} | "
+                 f"{fmt(b['Us_mass_balance_km_s'])} | "
+                 f"{r['porosity_target']:.4f} / {fmt(b['porosity'], '{:.4f}')} |")
+    strips = [f"row {r['index']} {r['strip']['width_um']:g} x {r['strip']['height_um']:g}, {r['strip']['end_time_ns']:.0f}"
+              for r in doc["rows"] if r.get("strip")]
+    if strips:
+        L.append("")
+        L.append(f"Strips (width x height [um], end time [ns]; voids of radius {doc['void_radius_um']:g} um, front fit "
+                 f"over {doc['fit_window_fraction_of_end_time'][0]:g}-{doc['fit_window_fraction_of_end_time'][1]:g} of "
+                 "the end time): " + "; ".join(strips) + ".")
+    notes = [r for r in doc["rows"] if r.get("density_note")]
+    fails = [(r["index"], f) for r in doc["rows"] for f in r["failed_runs"]]
+    cuts = [r["index"] for r in doc["rows"] if any(x.get("window_cut_at_top") for hh in r["by_h"].values() for x in hh["runs"])]
+    if notes or fails or cuts:
+        L.append("")
+    for r in notes:
+        L.append(f"- row {r['index']}: {r['density_note']}")
+    for i in cuts:
+        L.append(f"- row {i}: the fit window was cut where the front came within {TOP_GAP_DIAMETERS:g} void "
+                 "diameters of the free top (faster than the strip was sized for)")
+    for i, f in fails:
+        L.append(f"- row {i}: run failed: {f}")
+    with open(path, "w") as f:
+        f.write("\n".join(L) + "\n")
+
+
+def write_chart(path, doc):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    fig, ax = plt.subplots(figsize=(7.0, 5.0))
+    ms = sorted({r["m"] for r in doc["rows"]})
+    cmap = plt.get_cmap("viridis")
+    handles = []
+    for k, m in enumerate(ms):
+        col = cmap(k / max(1, len(ms) - 1) * 0.9)
+        rs = sorted((r for r in doc["rows"] if r["m"] == m), key=lambda r: r["up_km_s"])
+        ax.plot([r["up_km_s"] for r in rs], [r["Us_km_s"] for r in rs], "o", color=col, ms=7)
+        eu = [(r["up_km_s"], r["engine_Us_km_s"], r["engine_Us_spread_km_s"] or 0.0) for r in rs
+              if r["engine_Us_km_s"] is not None]
+        if eu:
+            ax.errorbar([e[0] for e in eu], [e[1] for e in eu], yerr=[e[2] for e in eu], fmt="s", mfc="none",
+                        color=col, ms=8, capsize=3)
+        cu = [(r["up_km_s"], r["compacted_Us_km_s"]) for r in rs if r["compacted_Us_km_s"] is not None]
+        if cu:
+            ax.plot([c[0] for c in cu], [c[1] for c in cu], "x--", color=col, lw=0.8, ms=7)
+        handles.append(Line2D([], [], color=col, lw=6, label=f"m = {m:g}"))
+    handles += [Line2D([], [], color="k", marker="o", ls="none", label="measured"),
+                Line2D([], [], color="k", marker="s", mfc="none", ls="none",
+                       label=f"engine (mean +- std over {doc['seeds']} seed(s))"),
+                Line2D([], [], color="k", marker="x", ls="--", lw=0.8, label="fully compacted Hugoniot")]
+    ax.set_xlabel("particle velocity up [km/s]")
+    ax.set_ylabel("shock velocity Us [km/s]")
+    ax.set_title(f"{doc['material']}, {doc['dim']}D plane strain, voids r = {doc['void_radius_um']:g} um, "
+                 f"h = {doc['h_um'][-1]:g} um", fontsize=10)
+    ax.grid(alpha=0.3)
+    ax.legend(handles=handles, fontsize=8, loc="lower right")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--data", default=os.path.join(ROOT, "bench", "data", "porous_iron_hugoniot.csv"),
+                    help="the measured rows (CSV; columns: " + ", ".join(COLUMNS) + ")")
+    ap.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "experiment"), help="output directory")
+    ap.add_argument("--dim", type=int, default=2, help="2 (plane strain; the engine is 2D)")
+    ap.add_argument("--h", default="4,2", help="cell sizes [um], comma-separated (the last, finest, is reported)")
+    ap.add_argument("--seeds", type=int, default=3, help="void seeds per row and h (1..N)")
+    ap.add_argument("--void-radius-um", type=float, default=10.0, help="void radius [um]")
+    ap.add_argument("--front-diameters", type=float, default=15.0,
+                    help="the compacted front's run [void diameters] that sets the end time")
+    ap.add_argument("--width-diameters", type=float, default=6.0,
+                    help="strip width [void diameters] (at least 10 cells of the coarsest h)")
+    ap.add_argument("--material", default="iron", help="base entry of cases/materials.toml")
+    ap.add_argument("--rows", default="", help="data rows to run, 0-based, comma-separated (default all)")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a case override for every run, e.g. materials.sample.yield_stress_MPa=300 (repeatable)")
+    ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--quick", action="store_true", help="one row, one seed, the coarsest h")
+    ap.add_argument("--check", type=float, default=0.0, metavar="PCT",
+                    help="exit 1 when a row's |Us error| against its measured Us exceeds PCT per cent")
+    ap.add_argument("--dry-run", action="store_true", help="print the planned runs, run nothing")
+    a = ap.parse_args()
+    command = " ".join([os.path.relpath(sys.argv[0], os.getcwd()) if os.path.exists(sys.argv[0]) else sys.argv[0]]
+                       + sys.argv[1:])
+    try:
+        if a.dim != 2:
+            raise DataError(f"--dim {a.dim}: the engine is 2D (plane strain) only")
+        a.hs = sorted(parse_list(a.h, float, "--h"), reverse=True)
+        if any(not h > 0.0 for h in a.hs):
+            raise DataError(f"--h {a.h}: cell sizes must be positive [um]")
+        if a.seeds < 1:
+            raise DataError(f"--seeds {a.seeds}: at least 1")
+        if not a.void_radius_um > 0.0:
+            raise DataError(f"--void-radius-um {a.void_radius_um:g}: must be positive")
+        if not a.width_diameters > 0.0:
+            raise DataError(f"--width-diameters {a.width_diameters:g}: must be positive")
+        if not a.front_diameters > 0.0:
+            raise DataError(f"--front-diameters {a.front_diameters:g}: must be positive")
+        if a.threads < 1:
+            raise DataError(f"--threads {a.threads}: at least 1")
+        for kv in a.set:
+            if "=" not in kv or not kv.split("=", 1)[0].strip():
+                raise DataError(f"--set {kv!r}: expected KEY=VALUE")
+        if not (os.path.isfile(a.driver) and os.access(a.driver, os.X_OK)):
+            raise DataError(f"--driver {a.driver}: not an executable file (build it: cmake --build build)")
+        data = read_data(a.data)
+        idx = list(range(len(data)))
+        if a.rows:
+            idx = parse_list(a.rows, int, "--rows")
+            bad = [i for i in idx if not 0 <= i < len(data)]
+            if bad:
+                raise DataError(f"--rows {a.rows}: row(s) {', '.join(map(str, bad))} not in {a.data} "
+                                f"({len(data)} rows, 0-based)")
+        if a.quick:
+            idx, a.hs, a.seeds = idx[:1], a.hs[:1], 1
+        a.step = common_step(a.hs)
+    except DataError as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    a.driver = os.path.abspath(a.driver)
+    a.out = os.path.abspath(a.out)
+    os.makedirs(os.path.join(a.out, "cases"), exist_ok=True)
+    os.makedirs(os.path.join(a.out, "runs"), exist_ok=True)
+    r = a.void_radius_um
+    width = round_up(max(a.width_diameters * 2.0 * r, 10.0 * max(a.hs)), a.step)
+    sets = set_args(a)
+
+    # plan: the strip of every row, then the runs
+    plan, rows_out, failed = [], [], []
+    for i in idx:
+        row = data[i]
+        rec = {"index": i, **{k: row[k] for k in COLUMNS}, "data_line": row["line"],
+               "porosity_target": 1.0 - 1.0 / row["m"], "by_h": {}, "failed_runs": []}
+        rows_out.append(rec)
+        try:
+            height, t_end, uc = size_row(a, row, i, width)
+        except DataError as e:
+            print(f"row {i}: {e}", flush=True)
+            rec["failed_runs"].append(str(e))
+            failed.append(f"row {i}: sizing")
+            continue
+        rec["strip"] = {"width_um": width, "height_um": height, "end_time_ns": t_end,
+                        "width_diameters": a.width_diameters,
+                        "compacted_front_wall_frame_m_s_sizing": uc, "front_diameters": a.front_diameters}
+        for h in a.hs:
+            rec["by_h"][f"{h:g}"] = {"runs": []}
+            for seed in range(1, a.seeds + 1):
+                text = case_text(row, i, a, h, seed, width, height, t_end)
+                path = os.path.join(a.out, "cases", f"row{i}-h{h:g}-seed{seed}.toml")
+                with open(path, "w") as f:
+                    f.write(text)
+                key = run_key(a.driver, text, sets)
+                plan.append((rec, row, h, seed, path, os.path.join(a.out, "runs", key), height, t_end))
+    if a.dry_run:
+        print("| row | m | up [km/s] | h [um] | seed | strip [um] | end [ns] | particles | steps | cached |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        tot = 0
+        for rec, row, h, seed, path, out, height, t_end in plan:
+            _, parts, steps, err = driver_check(a, path)
+            tot += parts * steps
+            print(f"| {rec['index']} | {row['m']:g} | {row['up_km_s']:g} | {h:g} | {seed} | {width:g} x {height:g} | "
+                  f"{t_end:.0f} | {parts} | {steps} | {'yes' if completed(out) else 'no'} |" + (f" {err}" if err else ""))
+        print(f"\n{len(plan)} runs, {tot:.3g} particle-steps")
+        return 1 if failed else 0
+
+    n = len(plan)
+    for k, (rec, row, h, seed, path, out, height, t_end) in enumerate(plan, 1):
+        label = f"[{k}/{n}] row {rec['index']} (m {row['m']:g}, up {row['up_km_s']:g} km/s) h {h:g} um seed {seed}"
+        cached = completed(out)
+        t0 = time.time()
+        if not cached:
+            cmd = [a.driver, "run", path, "--quiet", "--overwrite", "--out", out, "--threads", str(a.threads)] + sets
+            p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            if p.returncode != 0 and p.stderr.strip():
+                with open(os.path.join(a.out, "runs", os.path.basename(out) + ".stderr"), "w") as f:
+                    f.write(p.stderr)
+        try:
+            res = measure(out, row["up_km_s"], t_end, height, r)
+        except (OSError, KeyError, ValueError, IndexError, TypeError, ZeroDivisionError) as e:
+            why = str(e)
+            if not cached:
+                stderr_file = os.path.join(a.out, "runs", os.path.basename(out) + ".stderr")
+                if os.path.exists(stderr_file):
+                    why += " (driver: " + open(stderr_file).read().strip().splitlines()[-1] + ")"
+            print(f"{label}: FAILED: {why} ({out})", flush=True)
+            rec["failed_runs"].append(f"h {h:g} um seed {seed}: {why}")
+            failed.append(label)
+            continue
+        res.update({"seed": seed, "case": os.path.relpath(path, a.out), "dir": os.path.relpath(out, a.out),
+                    "cached": cached})
+        rec["by_h"][f"{h:g}"]["runs"].append(res)
+        print(f"{label}: {'cached' if cached else f'ran in {time.time() - t0:.1f} s'}, Us {res['Us_km_s']:.3f} km/s "
+              f"(measured {row['Us_km_s']:g}, compacted {fmt(res.get('compacted_Us_km_s', math.nan))}), "
+              f"porosity {res['porosity']:.4f}", flush=True)
+
+    # per row
+    commit, dirty = "", ""
+    for rec in rows_out:
+        for hh in rec["by_h"].values():
+            us = [x["Us_km_s"] for x in hh["runs"]]
+            hh["Us_km_s_mean"], hh["Us_km_s_std"] = mean_std(us)
+            hh["compacted_Us_km_s_mean"], _ = mean_std([x.get("compacted_Us_km_s", math.nan) for x in hh["runs"]])
+            hh["seeds_measured"] = len(us)
+            for x in hh["runs"]:
+                commit, dirty = commit or x["git_commit"], dirty or x["git_dirty"]
+        fine = rec["by_h"].get(f"{a.hs[-1]:g}", {"runs": []})
+        ok = bool(fine["runs"])
+        rec["engine_h_um"] = a.hs[-1]
+        rec["engine_Us_km_s"] = fine.get("Us_km_s_mean", math.nan) if ok else math.nan
+        rec["engine_Us_spread_km_s"] = fine.get("Us_km_s_std", math.nan) if ok else math.nan
+        rec["compacted_Us_km_s"] = fine.get("compacted_Us_km_s_mean", math.nan) if ok else math.nan
+        rec["engine_error_pct"] = 100.0 * (rec["engine_Us_km_s"] / rec["Us_km_s"] - 1.0)
+        rec["compacted_error_pct"] = 100.0 * (rec["compacted_Us_km_s"] / rec["Us_km_s"] - 1.0)
+        rec["resolution_change_pct"] = math.nan
+        if len(a.hs) >= 2:
+            u1 = rec["by_h"].get(f"{a.hs[-2]:g}", {}).get("Us_km_s_mean", math.nan)
+            u2 = rec["engine_Us_km_s"]
+            rec["resolution_change_pct"] = 100.0 * abs(u1 - u2) / u2
+            rec["resolution_h_um"] = [a.hs[-2], a.hs[-1]]
+        keys = ["Us_mass_balance_km_s", "P_jump_GPa", "rho_jump_g_cm3", "behind_P_long_GPa", "behind_p_GPa", "behind_rho_bulk_g_cm3",
+                "behind_rho_points_g_cm3", "behind_Uy_m_s", "behind_T_K", "compacted_P_GPa", "compacted_rho_g_cm3",
+                "porosity", "rho0_library_g_cm3", "rho00_engine_g_cm3"]
+        rec["behind"] = {k: mean_std([x.get(k, math.nan) for x in fine["runs"]])[0] for k in keys}
+        rho_lib = rec["behind"]["rho0_library_g_cm3"]
+        if math.isfinite(rho_lib):
+            want = rec["rho00_g_cm3"] * rec["m"]
+            if abs(rho_lib / want - 1.0) * 100.0 > DENSITY_NOTE_PCT:
+                rec["density_note"] = (f"the library's dense density {rho_lib:.4f} g/cm^3 differs from the row's "
+                                       f"rho00 x m = {want:.4f} g/cm^3 ({100 * (rho_lib / want - 1):+.1f} %); the "
+                                       f"sample's porosity follows m, its rho00 is {rho_lib / rec['m']:.4f} g/cm^3")
+    done = [x for x in rows_out if not x["failed_runs"] and math.isfinite(x["engine_error_pct"])]
+    eng = [abs(x["engine_error_pct"]) for x in done]
+    cmp_ = [abs(x["compacted_error_pct"]) for x in done if math.isfinite(x["compacted_error_pct"])]
+    summary = {
+        "rows_complete": len(done),
+        "engine_mean_abs_error_pct": float(np.mean(eng)) if eng else math.nan,
+        "engine_worst_abs_error_pct": max(eng) if eng else math.nan,
+        "engine_worst_row": max(done, key=lambda x: abs(x["engine_error_pct"]))["index"] if done else None,
+        "compacted_mean_abs_error_pct": float(np.mean(cmp_)) if cmp_ else math.nan,
+        "compacted_worst_abs_error_pct": max(cmp_) if cmp_ else math.nan,
+        "compacted_worst_row": max(done, key=lambda x: abs(x["compacted_error_pct"]))["index"] if cmp_ else None,
+    }
+    doc = {"command": command, "data": os.path.relpath(os.path.abspath(a.data), ROOT) if os.path.abspath(a.data).startswith(ROOT + os.sep) else a.data,
+           "driver": a.driver, "driver_sha1": _DRIVER_HASH.get(a.driver, ""), "git_commit": commit,
+           "git_dirty": dirty, "dim": a.dim, "material": a.material, "sets": a.set,
+           "void_radius_um": r, "h_um": a.hs, "seeds": a.seeds, "threads": a.threads, "quick": a.quick,
+           "frame": "Us = wall-frame front speed + up: in the wall frame (the symmetry plane of a symmetric "
+                    "impact) the unshocked sample moves at -up and the shocked material is at rest; adding +up "
+                    "gives the frame of the unshocked sample, where the shocked material moves at +up",
+           "fit_window_fraction_of_end_time": list(WINDOW), "behind_band_fraction_of_front": list(BAND),
+           "rows": rows_out, "summary": summary}
+    with open(os.path.join(a.out, "experiment.json"), "w") as f:
+        json.dump(clean(doc), f, indent=1)
+    doc = clean(doc)
+    write_markdown(os.path.join(a.out, "experiment.md"), doc)
+    try:
+        write_chart(os.path.join(a.out, "experiment_us_up.png"), doc)
+    except Exception as e:  # a chart failure must not lose the table
+        print(f"chart failed: {e}", file=sys.stderr)
+        failed.append("chart")
+    print(open(os.path.join(a.out, "experiment.md")).read())
+    print(f"Wrote {os.path.join(a.out, 'experiment.json')}, experiment.md, experiment_us_up.png")
+    rc = 0
+    if failed:
+        print(f"{len(failed)} failure(s): " + "; ".join(failed))
+        rc = 1
+    if a.check > 0.0:
+        bad = [x for x in rows_out if not (abs(x["engine_error_pct"]) <= a.check)]  # nan fails
+        for x in bad:
+            print(f"check: row {x['index']}: |Us error| {fmt(abs(x['engine_error_pct']), '{:.1f}')} % > {a.check:g} %")
+        print(f"check within {a.check:g} %: {'FAIL' if bad else 'PASS'}")
+        rc = 1 if bad else rc
+    return rc
+
+
+if __name__ == "__main__":
+    sys.exit(main())
