@@ -51,7 +51,7 @@ void flush_checked(std::ofstream& o, const std::filesystem::path& file) {
 
 // What a run writes into its output directory (and nothing else is removed by --overwrite).
 const char* const kOutputFiles[] = {"run.json", "case_resolved.toml", "energy.csv", "series.csv", "series.h5",
-                                    "front.csv", "wall.csv", "voids.csv"};
+                                    "front.csv", "wall.csv", "voids.csv", "gauges.csv", "freesurface.csv"};
 const char* const kOutputDirs[] = {"fields", "figures", "checkpoint"};
 
 // Before a run writes: an earlier run's outputs (only with overwrite; a new run without it
@@ -234,6 +234,19 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   if (ec) throw OutputError("cannot rename " + tmp + " to " + file.string() + ": " + ec.message());
 }
 
+// `check`'s lines on the followed points: each gauge (only their count beyond 20), each free surface.
+void describe_points(std::ostream& o, const Scene& sc) {
+  const Particles& P = sc.particles;
+  if (!sc.gauges.empty()) o << "gauges          " << sc.gauges.size() << " (gauges.csv)\n";
+  if (sc.gauges.size() <= 20)
+    for (const auto& g : sc.gauges)
+      o << "  gauge " << std::left << std::setw(10) << g.name << std::right << " point " << g.id << " of body "
+        << sc.bodies[P.body[g.id]].name << " at (" << P.x[g.id] * 1e6 << ", " << P.y[g.id] * 1e6 << ") um\n";
+  for (const auto& f : sc.free_surfaces)
+    o << "free surface    body " << f.body_name << ": the " << f.ids.size() << " points of its top row at y = "
+      << P.y[f.ids.front()] * 1e6 << " um (freesurface.csv)\n";
+}
+
 }  // namespace
 
 std::string describe_scene(const Scene& sc) {
@@ -249,6 +262,7 @@ std::string describe_scene(const Scene& sc) {
       << b.particles << " particles, area " << b.area * 1e12 << " um^2"
       << (b.voids ? ", porosity " + std::to_string(b.porosity) + " (" + std::to_string(b.voids) + " voids)" : "")
       << "\n";
+  describe_points(o, sc);
   if (sc.solver.void_faces == VoidFaces::Separate)
     o << "void faces      " << sc.solver.void_face_fields << " velocity fields, welded at " << sc.solver.void_face_volume_fraction
       << " of a cell" << (sc.solver.void_face_merge ? ", merged once closed" : "") << "\n";
@@ -480,6 +494,30 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
            "wall_removed_J_per_m,contact_removed_J_per_m,residual_J_per_m\n",
            resume);
   const double E0 = resume ? resume->number("run/E0") : sim.energy().total();
+  // gauges.csv and freesurface.csv: the points followed from t = 0 (engine/gauges.hpp), with
+  // energy.csv's rows
+  PointRecorder points(scene.gauges, scene.free_surfaces, sim.particles().size());
+  if (resume) points.restore(*resume);
+  std::ofstream gauges, surface;
+  if (points.has_gauges()) {
+    open_csv(gauges, out / "gauges.csv", kGaugeHeader, resume);
+    gauges << std::setprecision(10);
+  }
+  if (points.has_surfaces()) {
+    open_csv(surface, out / "freesurface.csv", kFreeSurfaceHeader, resume);
+    surface << std::setprecision(10);
+  }
+  auto write_points = [&] {
+    Timed t(s.diagnostics_seconds);
+    if (gauges.is_open()) {
+      points.gauge_rows(gauges, sim);
+      flush_checked(gauges, out / "gauges.csv");
+    }
+    if (surface.is_open()) {
+      points.surface_rows(surface, sim);
+      flush_checked(surface, out / "freesurface.csv");
+    }
+  };
   energy << std::setprecision(12);
   const bool has_wall = scene.solver.walls.bottom != kern::Wall::None;
   std::ofstream wall;
@@ -524,7 +562,8 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   double particle_steps = 0.0, steps_before = 0.0, wall_before = 0.0;
   const double n = static_cast<double>(sim.particles().size());
   const std::pair<const char*, std::ofstream*> csvs[] = {
-      {"energy.csv", &energy}, {"series.csv", &series}, {"front.csv", &front}, {"wall.csv", &wall}, {"voids.csv", &voids}};
+      {"energy.csv", &energy}, {"series.csv", &series}, {"front.csv", &front}, {"wall.csv", &wall}, {"voids.csv", &voids},
+      {"gauges.csv", &gauges}, {"freesurface.csv", &surface}};
   // the whole state at a step boundary, every output of the step written (engine/checkpoint.hpp);
   // the last two are kept
   auto write_checkpoint = [&] {
@@ -547,6 +586,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     w.put("run/output_seconds", s.output_seconds);
     for (std::size_t c = 0; c < columns.size(); ++c) w.put("series/" + columns[c], table[c]);
     w.put("run/snapshots", snaps.index_text());
+    if (points.has_gauges() || points.has_surfaces()) points.save(w);
     for (const auto& [name, o] : csvs)
       if (o->is_open()) w.put(std::string("csv/") + name, static_cast<std::int64_t>(o->tellp()));
     w.commit();
@@ -565,6 +605,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
       snapshot();
       next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
       write_energy();
+      write_points();
       write_series();
       next_energy = scene.run.diagnostics_interval;
     }
@@ -596,6 +637,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
       }
       if (sim.time() >= next_energy - eps) {
         write_energy();
+        write_points();
         write_front();
         write_series();
         next_energy = sim.time() + scene.run.diagnostics_interval;
@@ -640,7 +682,8 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   s.end_time = sim.time();
   // final state, whatever happened; after an output failure each is still tried (the first
   // failure is the run's message)
-  for (const auto& write : {std::function<void()>(write_energy), std::function<void()>(write_series),
+  for (const auto& write : {std::function<void()>(write_energy), std::function<void()>(write_points),
+                            std::function<void()>(write_series),
                             std::function<void()>(write_series_h5), std::function<void()>(snapshot)}) {
     try {
       write();

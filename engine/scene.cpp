@@ -124,6 +124,120 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, double bx0, double bx1,
   return P;
 }
 
+// [[bodies]] record_free_surface: the body's top row at t = 0 (engine/gauges.hpp, top_row). Its top
+// must be free: no point of another body within a point spacing above the row, no top wall there.
+void add_free_surfaces(Scene& s, double d) {
+  const Particles& P = s.particles;
+  const double grid_top = s.geom.y0 + s.geom.length_y();
+  for (std::size_t b = 0; b < s.bodies.size(); ++b) {
+    if (!s.bodies[b].record_free_surface) continue;
+    FreeSurface f{s.bodies[b].name, top_row(P, static_cast<std::uint8_t>(b), d)};
+    double top = -kInf, x0 = kInf, x1 = -kInf;
+    for (const std::uint32_t i : f.ids) {
+      top = std::max(top, P.y[i]);
+      x0 = std::min(x0, P.x[i]);
+      x1 = std::max(x1, P.x[i]);
+    }
+    const std::string key = "case key 'bodies[" + std::to_string(b) + "].record_free_surface' = true (body '" +
+                            s.bodies[b].name + "'): its top surface at y = " +
+                            format_number(std::round((top + 0.5 * d) * 1e12) * 1e-6 + 0.0) +  // [um], round-off cut
+                            " um is not free: ";
+    for (std::size_t i = 0; i < P.size(); ++i)
+      if (P.body[i] != static_cast<std::uint8_t>(b) && P.y[i] > top && P.y[i] < top + 1.5 * d && P.x[i] > x0 - d && P.x[i] < x1 + d)
+        throw CaseError(key + "body '" + s.bodies[P.body[i]].name + "' lies on it; allowed on a body whose top "
+                        "(max y) surface nothing touches");
+    if (s.solver.walls.top != kern::Wall::None && top + 1.5 * d > grid_top)
+      throw CaseError(key + "it touches the grid's top wall (walls.top); allowed on a body whose top (max y) surface "
+                      "nothing touches");
+    s.free_surfaces.push_back(std::move(f));
+  }
+}
+
+// The positions of one [[gauges]] table: `position` (one gauge, named `name`) or `count` gauges
+// evenly from `from` to `to` (named <name>_<k>, k from 0; count 1: at `from`).
+std::vector<std::pair<std::string, std::pair<double, double>>> gauge_positions(CaseReader& r, const std::string& name) {
+  const bool line = r.has("from") || r.has("to") || r.has("count");
+  const std::string either = "give either 'position' (one gauge, e.g. position_um = [10.0, 200.0]) or 'from', 'to' "
+                             "and 'count' (a line of gauges named " + name + "_<k>, e.g. from_um = [10.0, 100.0], "
+                             "to_um = [10.0, 400.0], count = 4)";
+  if (line && r.has("position"))
+    throw CaseError("case table [" + r.path() + "] (gauge '" + name + "'): " + either + ", not both");
+  std::vector<std::pair<std::string, std::pair<double, double>>> at;
+  if (!line) {
+    try {
+      at.emplace_back(name, r.pair("position", kLength, false));
+    } catch (const CaseError& e) {  // missing or misspelt: say what else would do
+      throw CaseError(std::string(e.what()) + "; " + either);
+    }
+    return at;
+  }
+  const auto [ax, ay] = r.pair("from", kLength, false);
+  const auto [bx, by] = r.pair("to", kLength, false);
+  const long n = r.integer("count", 1, 10000);
+  for (long k = 0; k < n; ++k) {
+    const double f = n > 1 ? double(k) / double(n - 1) : 0.0;
+    at.emplace_back(name + "_" + std::to_string(k), std::pair{ax + f * (bx - ax), ay + f * (by - ay)});
+  }
+  return at;
+}
+
+// Whether (x, y) lies within a body's outline (its rectangle or disk, voids included).
+bool in_outline(const BodyInfo& b, double x, double y) {
+  if (!b.disk) return x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1;
+  const double r = 0.5 * (b.x1 - b.x0), dx = x - (b.x0 + r), dy = y - 0.5 * (b.y0 + b.y1);
+  return dx * dx + dy * dy <= r * r;
+}
+
+// [[gauges]]: each gauge follows the point nearest its position at t = 0, of the body named by
+// `body`, else of the bodies whose outline holds the position (in_outline: a gauge in a void
+// follows the nearest point of its body); a position outside that body's outline, or every
+// body's, is refused. The resolved case names the body when all the table's points lie in one.
+void read_gauges(CaseReader& top, Scene& s) {
+  auto tables = top.tables("gauges");
+  std::vector<std::string> names;
+  for (std::size_t t = 0; t < tables.size(); ++t) {
+    CaseReader& r = tables[t];
+    const std::string name = r.string("name", "gauge" + std::to_string(t));
+    if (name.empty() || name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.-") !=
+                            std::string::npos)
+      throw CaseError("case key '" + r.path() + ".name': '" + name + "' is not a gauge name (a column of gauges.csv): "
+                      "allowed are letters, digits, '_', '-' and '.'");
+    int body = -1;
+    if (r.has("body")) {
+      const std::string b = r.string("body");
+      std::string defined;
+      for (std::size_t k = 0; k < s.bodies.size(); ++k) {
+        if (s.bodies[k].name == b) body = static_cast<int>(k);
+        defined += (defined.empty() ? "'" : ", '") + s.bodies[k].name + "'";
+      }
+      if (body < 0) throw CaseError("case key '" + r.path() + ".body': no body named '" + b + "'; defined: " + defined);
+    }
+    const std::string keys = r.has("position") ? "case key '" + r.path() + ".position'"
+                                               : "case keys '" + r.path() + ".from', '" + r.path() + ".to'";
+    std::vector<int> in_body;
+    for (const auto& [gname, xy] : gauge_positions(r, name)) {
+      std::vector<bool> holds(s.bodies.size(), false);
+      for (std::size_t k = 0; k < s.bodies.size(); ++k)
+        holds[k] = (body < 0 || body == static_cast<int>(k)) && in_outline(s.bodies[k], xy.first, xy.second);
+      const auto near = nearest_point(s.particles, xy.first, xy.second, holds);
+      if (near.index == s.particles.size())
+        throw CaseError(keys + ": gauge '" + gname + "' at [" + format_number(xy.first * 1e6) + ", " +
+                        format_number(xy.second * 1e6) + "] um lies outside " +
+                        (body < 0 ? std::string("every body") : "body '" + s.bodies[body].name + "'") +
+                        "; allowed: a position within a body's outline (x_range and y_range, or the disk)");
+      if (std::find(names.begin(), names.end(), gname) != names.end())
+        throw CaseError("case key '" + r.path() + ".name': gauge '" + gname + "' is named twice (gauges.csv tells "
+                        "gauges apart by name)");
+      names.push_back(gname);
+      s.gauges.push_back({gname, static_cast<std::uint32_t>(near.index)});
+      in_body.push_back(s.particles.body[near.index]);
+    }
+    r.finish();
+    if (body < 0 && std::all_of(in_body.begin(), in_body.end(), [&](int b) { return b == in_body.front(); }))
+      s.resolved["gauges"][t].as_table()->insert_or_assign("body", s.bodies[in_body.front()].name);
+  }
+}
+
 }  // namespace
 
 Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
@@ -405,6 +519,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         bx0 = sb.x0; bx1 = sb.x1; by0 = 2 * plane - sb.y1; by1 = 2 * plane - sb.y0;
         info.porosity = sb.porosity;
         info.voids = sb.voids;
+        info.disk = sb.disk;
         for (Void v : sb.cut) info.cut.push_back({v.x, 2 * plane - v.y, v.r});
       } else if (r.choice("shape", {"rectangle", "disk"}, "rectangle") == "rectangle") {
         std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
@@ -415,6 +530,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         const auto [cx, cy] = r.pair("center", kLength, false);
         const double rad = r.quantity("radius", kLength, 0.0, kInf);
         bx0 = cx - rad; bx1 = cx + rad; by0 = cy - rad; by1 = cy + rad;
+        info.disk = true;
         check_points(r.path() + ".radius", bx1 - bx0, by1 - by0, ppc);
         P = fill_lattice(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b),
                          [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
@@ -459,6 +575,7 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
         info.voids = res.voids;
         info.cut = res.cut;
       }
+      info.record_free_surface = r.boolean("record_free_surface", false);
       r.finish();
       info.x0 = bx0; info.x1 = bx1; info.y0 = by0; info.y1 = by1;
       const double gx1 = s.geom.x0 + s.geom.length_x(), gy1 = s.geom.y0 + s.geom.length_y();
@@ -549,6 +666,8 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
       s.regions.push_back(g);
     }
   }
+  add_free_surfaces(s, s.geom.h / ppc_all);
+  read_gauges(top, s);
   top.finish();
   return s;
 }

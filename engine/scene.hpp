@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 
 #include "engine/diagnostics.hpp"
+#include "engine/gauges.hpp"
 #include "engine/material.hpp"
 #include "engine/particles.hpp"
 #include "engine/porous.hpp"
@@ -33,9 +34,11 @@ struct BodyInfo {
   double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
   double vx0 = 0.0, vy0 = 0.0;  // initial velocity [m/s]
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bounding rectangle [m]
+  bool disk = false;  // its outline: the disk inscribed in that rectangle, else the rectangle
   double porosity = 0.0;  // fraction of the dense body's points removed by voids
   long voids = 0;
   std::vector<Void> cut;  // its voids (a mirror copy: their mirror images)
+  bool record_free_surface = false;  // its top surface's velocity goes to freesurface.csv
 };
 
 struct Scene {
@@ -48,6 +51,8 @@ struct Scene {
   Particles particles;
   std::size_t target = 0;       // the body named "target", else body 0: diagnostics default to it
   std::vector<Region> regions;  // bands for series.csv (default: the study's I, II, III of the target)
+  std::vector<Gauge> gauges;    // [[gauges]]: the points gauges.csv follows
+  std::vector<FreeSurface> free_surfaces;  // bodies with record_free_surface: freesurface.csv
   toml::table resolved;  // the case with every default filled in
   std::string name;      // case file stem
 };

@@ -14,6 +14,8 @@ For each OUTDIR writes PNGs under OUTDIR/figures/:
   distributions.png      histograms of rho, P, T, U_y in one region (--region, default I) at up to
                          three times, against Gaussians of the same mean and deviation
   history.png            compression front, wall stress and energy against time
+  freesurface.png        free-surface velocity against time (freesurface.csv) and, with gauges.csv,
+                         each gauge's pressure
 With several OUTDIRs also compare_means.png and compare_std.png (region --region) in the first
 OUTDIR's figures/ (or --out DIR).
 
@@ -51,7 +53,7 @@ except ImportError:  # snapshot figures are skipped; series figures still work
     h5py = None
 
 DEFAULT_REGIONS = [("I", 100.0, 900.0), ("II", 100.0, 600.0), ("III", 100.0, 300.0)]
-FIGURES = ("map", "series", "velocity", "dissipation", "distributions", "history", "compare")
+FIGURES = ("map", "series", "velocity", "dissipation", "distributions", "history", "freesurface", "compare")
 
 # The four quantities the study follows: (series column stem, snapshot dataset, scale to the
 # plotted unit, axis label).
@@ -819,6 +821,38 @@ def fig_history(run, a):
     return [save(fig, os.path.join(figdir(run.dir), "history.png"), a.dpi)]
 
 
+def fig_free_surface(run, a):
+    surface, gauges = run.csv("freesurface.csv"), run.csv("gauges.csv")
+    if surface is None:
+        raise Skip("no freesurface.csv (no body with record_free_surface)")
+    panels = 2 if gauges is not None else 1
+    fig, axes = plt.subplots(panels, 1, figsize=(8, 3.5 * panels), sharex=True, constrained_layout=True,
+                             squeeze=False)
+    t, u = numeric(surface, "time_ns", "u_fs_m_s")
+    bodies = np.array(surface["body"])
+    ax = axes[0][0]
+    for b in dict.fromkeys(bodies):
+        ax.plot(t[bodies == b], u[bodies == b], lw=1.5, label=b)
+    ax.legend(fontsize=8)
+    ax.set_ylabel("free-surface velocity [m/s]")
+    ax.set_title("Mean y-velocity of the top row of points (what a VISAR records)", fontsize=10)
+    if gauges is not None:
+        t, p = numeric(gauges, "time_ns", "P_GPa")
+        names = np.array(gauges["gauge"])
+        ax = axes[1][0]
+        for g in dict.fromkeys(names):
+            ax.plot(t[names == g], p[names == g], lw=1.0, label=g)
+        if len(set(names)) <= 10:
+            ax.legend(fontsize=8)
+        ax.set_ylabel("P [GPa]")
+        ax.set_title("Pressure at the gauges (compression positive)", fontsize=10)
+    axes[-1][0].set_xlabel("t [ns]")
+    for row in axes:
+        row[0].grid(alpha=0.3)
+    fig.suptitle(run.label(), fontsize=11)
+    return [save(fig, os.path.join(figdir(run.dir), "freesurface.png"), a.dpi)]
+
+
 # ----------------------------------------------------------------------------------------------
 # Comparison of several directories
 
@@ -963,7 +997,8 @@ def main(argv=None):
                 ("velocity", "velocity_field.png", fig_velocity),
                 ("dissipation", "dissipation.png", fig_dissipation),
                 ("distributions", "distributions.png", fig_distributions),
-                ("history", "history.png", fig_history)]
+                ("history", "history.png", fig_history),
+                ("freesurface", "freesurface.png", fig_free_surface)]
         for key, label, func in jobs:
             if key in a.only:
                 written += attempt(label, od, func, run, a, verbose=a.traceback)

@@ -2,7 +2,8 @@
 # Checkpoint and resume as a user meets them: a run killed by SIGKILL at a random
 # moment (snapshots every 1 ns, so often mid-snapshot or mid-checkpoint) and resumed at another
 # thread count ends with every output file byte for byte that of the uninterrupted run: CSV rows
-# neither duplicated nor missing, the same snapshots, XDMF index and series.h5. A SIGTERM writes a
+# neither duplicated nor missing (gauges.csv and freesurface.csv too: the resumed run follows the
+# same points), the same snapshots, XDMF index and series.h5. A SIGTERM writes a
 # checkpoint; a damaged newest checkpoint is named and the one before it used; a completed run,
 # a directory without checkpoints and a directory another run is writing are refused (exit 2).
 #   tests/driver_restart.sh SHOCKMPM SOURCE_DIR
@@ -11,11 +12,17 @@ EXE="$1"; SRC="$2"
 TMP="$(mktemp -d)"; trap 'rm -rf "$TMP"' EXIT
 fail=0
 say() { echo "$*" >&2; fail=1; }
-# the quick start, narrowed to 120 um and 24 ns: about 2 s on 2 threads
+# the quick start, narrowed to 120 um and 24 ns, with a line of gauges and the free surface of
+# its top: about 2 s on 2 threads
 CASE="$SRC/cases/quickstart.toml"
 SET=(--set run.end_time_ns=24.0 --set run.snapshot_interval_ns=1.0 --set run.diagnostics_interval_ns=0.5
-     --set 'grid.x_range_um=[0.0, 120.0]' --set 'bodies.0.x_range_um=[0.0, 120.0]')
+     --set 'grid.x_range_um=[0.0, 120.0]' --set 'bodies.0.x_range_um=[0.0, 120.0]'
+     --set 'gauges=[{name = "g", from_um = [60.0, 10.0], to_um = [60.0, 390.0], count = 5}]'
+     --set bodies.target.record_free_surface=true)
 "$EXE" run "$CASE" --out "$TMP/full" --quiet --threads 2 "${SET[@]}" || say "uninterrupted run failed"
+for f in gauges.csv freesurface.csv; do
+  [ "$(cat "$TMP/full/$f" 2> /dev/null | wc -l)" -gt 45 ] || say "the uninterrupted run wrote no rows of $f"
+done
 [ -d "$TMP/full/checkpoint" ] && say "a completed run left its checkpoints"
 same_as_full() {  # every output of the uninterrupted run, byte for byte
   local d="$1" f

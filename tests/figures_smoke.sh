@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Smoke test of scripts/figures.py: build two small synthetic shockmpm output directories (run.json,
-# series.csv with 3 regions x 5 times, front/wall/energy CSVs, fields/particles.xdmf naming two HDF5
-# snapshots, plus a stale snapshot it does not name), run the script on them and check that every
+# series.csv with 3 regions x 5 times, front/wall/energy CSVs, the second with freesurface.csv and
+# gauges.csv instead of wall.csv, fields/particles.xdmf naming two HDF5 snapshots, plus a stale
+# snapshot it does not name), run the script on them and check that every
 # expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, and the
 # exit statuses (0 written, 1 nothing made, 2 bad arguments). series.csv's columns are the
 # engine's own: the header is read from a one-step run of the driver on the quick-start case.
@@ -83,6 +84,17 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
             f.write("time_ns,wall_stress_GPa\n")
             for t in np.arange(0.0, 501.0, 10.0):
                 f.write(f"{t},{20 + 2 * np.sin(t / 30)}\n")
+    else:  # a plate with a free surface and two gauges instead of the wall
+        with open(os.path.join(outdir, "freesurface.csv"), "w") as f:
+            f.write("time_ns,body,u_fs_m_s\n")
+            for t in np.arange(0.0, 501.0, 10.0):
+                f.write(f"{t},target,{-speed if t < 300 else speed}\n")
+        with open(os.path.join(outdir, "gauges.csv"), "w") as f:
+            f.write("time_ns,gauge,x_um,y_um,vx_m_s,vy_m_s,sigma_xx_GPa,sigma_yy_GPa,sigma_xy_GPa,P_GPa,rho_g_cc,T_K\n")
+            for t in np.arange(0.0, 501.0, 10.0):
+                for g, y in (("g_0", 100.0), ("g_1", 200.0)):
+                    p = 15.0 if 2 * y < t < 300 else 0.0
+                    f.write(f"{t},{g},10,{y},0,{-speed},{-p},{-p},0,{p},2.7,300\n")
     with open(os.path.join(outdir, "energy.csv"), "w") as f:
         f.write("time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,"
                 "momentum_y_kg_m_s_per_m\n")
@@ -183,11 +195,12 @@ A="$TMP/a/figures"
 B="$TMP/b/figures"
 check "$A"/{map_P,map_T,series_means,series_std,velocity_field,dissipation,distributions,history}.png \
       "$A"/compare_{means,std}.png \
-      "$B"/{map_P,series_means,series_std,velocity_field,dissipation,distributions,history}.png
+      "$B"/{map_P,series_means,series_std,velocity_field,dissipation,distributions,history,freesurface}.png
 if [ -e "$B/map_T.png" ]; then echo "map_T.png written for a run without temperature" >&2; fail=1; fi
 grep -q "skip map_T.png" "$TMP/stderr" || { echo "no skip message for map_T.png" >&2; fail=1; }
+grep -q "skip freesurface.png ($TMP/a): no freesurface.csv" "$TMP/stderr" || { echo "no skip message for freesurface.png" >&2; fail=1; }
 n_written=$(grep -c '\.png$' "$TMP/stdout" || true)
-[ "$n_written" = 17 ] || { echo "stdout names $n_written PNGs, expected 17" >&2; fail=1; }
+[ "$n_written" = 18 ] || { echo "stdout names $n_written PNGs, expected 18" >&2; fail=1; }
 
 echo "== exit statuses"
 set +e

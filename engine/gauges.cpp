@@ -1,0 +1,128 @@
+#include "engine/gauges.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/checkpoint.hpp"
+#include "engine/diagnostics.hpp"
+#include "engine/simulation.hpp"
+
+namespace smpm {
+
+NearestPoint nearest_point(const Particles& P, double x, double y, const std::vector<bool>& in_body) {
+  NearestPoint best{P.size(), std::numeric_limits<double>::infinity()};
+  double best2 = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    if (std::size_t{P.body[i]} >= in_body.size() || !in_body[P.body[i]]) continue;
+    const double dx = P.x[i] - x, dy = P.y[i] - y, d2 = dx * dx + dy * dy;
+    if (d2 < best2) {  // strict: the lowest index among equally near points
+      best2 = d2;
+      best.index = i;
+    }
+  }
+  best.distance = std::sqrt(best2);
+  return best;
+}
+
+std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double spacing) {
+  double top = -std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (P.body[i] == body) top = std::max(top, P.y[i]);
+  std::vector<std::uint32_t> ids;
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (P.body[i] == body && P.y[i] > top - 0.5 * spacing) ids.push_back(static_cast<std::uint32_t>(i));
+  return ids;
+}
+
+PointRecorder::PointRecorder(std::vector<Gauge> gauges, std::vector<FreeSurface> surfaces, std::size_t n_points)
+    : gauges_(std::move(gauges)), surfaces_(std::move(surfaces)), n_points_(n_points) {
+  index();
+}
+
+void PointRecorder::index() {
+  unique_.clear();
+  for (const auto& g : gauges_) unique_.push_back(g.id);
+  for (const auto& s : surfaces_) unique_.insert(unique_.end(), s.ids.begin(), s.ids.end());
+  std::sort(unique_.begin(), unique_.end());
+  unique_.erase(std::unique(unique_.begin(), unique_.end()), unique_.end());
+  slot_.assign(unique_.empty() ? 0 : n_points_, -1);
+  for (std::size_t k = 0; k < unique_.size(); ++k) slot_[unique_[k]] = static_cast<std::int32_t>(k);
+  where_.assign(unique_.size(), 0);
+}
+
+void PointRecorder::locate(const Particles& P) {
+  if (unique_.empty()) return;
+  for (std::size_t i = 0; i < P.size(); ++i)
+    if (const std::int32_t s = slot_[P.id[i]]; s >= 0) where_[static_cast<std::size_t>(s)] = i;
+}
+
+void PointRecorder::save(CheckpointWriter& w) const {
+  std::vector<std::uint32_t> ids;
+  for (const auto& g : gauges_) ids.push_back(g.id);
+  for (const auto& s : surfaces_) ids.insert(ids.end(), s.ids.begin(), s.ids.end());
+  w.put("points/ids", ids);
+}
+
+void PointRecorder::restore(const CheckpointReader& r) {
+  if (!r.has("points/ids")) return;
+  std::vector<std::uint32_t> ids;
+  r.get("points/ids", ids);
+  std::size_t n = gauges_.size();
+  for (const auto& s : surfaces_) n += s.ids.size();
+  const bool in_range = std::all_of(ids.begin(), ids.end(), [&](std::uint32_t id) { return id < n_points_; });
+  if (ids.size() != n || !in_range)
+    throw CheckpointError("checkpoint " + r.file().string() + ": record 'points/ids' holds " +
+                          std::to_string(ids.size()) + " point ids" + (in_range ? "" : ", some beyond the particle count") +
+                          ", the case follows " + std::to_string(n) + " (gauges and free-surface points): not a "
+                          "checkpoint of this case");
+  std::size_t k = 0;
+  for (auto& g : gauges_) g.id = ids[k++];
+  for (auto& s : surfaces_)
+    for (auto& id : s.ids) id = ids[k++];
+  index();
+}
+
+std::vector<GaugeSample> PointRecorder::sample(const Simulation& sim) {
+  const Particles& P = sim.particles();
+  locate(P);
+  std::vector<GaugeSample> out;
+  for (const auto& g : gauges_) {
+    const std::size_t i = where_[static_cast<std::size_t>(slot_[g.id])];
+    const int k = sim.body_material()[P.body[i]];
+    out.push_back({P.x[i], P.y[i], P.vx[i], P.vy[i], P.sxx[i] - P.p[i], P.syy[i] - P.p[i], P.sxy[i], P.p[i],
+                   P.m[i] / P.V[i], particle_temperature(P, i, sim.thermo()[k], sim.materials()[k])});
+  }
+  return out;
+}
+
+std::vector<double> PointRecorder::surface_velocity(const Simulation& sim) {
+  const Particles& P = sim.particles();
+  locate(P);
+  std::vector<double> u;
+  for (const auto& s : surfaces_) {
+    double sum = 0.0;
+    for (const std::uint32_t id : s.ids) sum += P.vy[where_[static_cast<std::size_t>(slot_[id])]];
+    u.push_back(s.ids.empty() ? 0.0 : sum / double(s.ids.size()));
+  }
+  return u;
+}
+
+void PointRecorder::gauge_rows(std::ostream& o, const Simulation& sim) {
+  const auto v = sample(sim);
+  const double t = sim.time() * 1e9;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const GaugeSample& g = v[k];
+    o << t << ',' << gauges_[k].name << ',' << g.x * 1e6 << ',' << g.y * 1e6 << ',' << g.vx << ',' << g.vy << ','
+      << g.sxx * 1e-9 << ',' << g.syy * 1e-9 << ',' << g.sxy * 1e-9 << ',' << g.P * 1e-9 << ',' << g.rho * 1e-3 << ','
+      << g.T << '\n';
+  }
+}
+
+void PointRecorder::surface_rows(std::ostream& o, const Simulation& sim) {
+  const auto u = surface_velocity(sim);
+  const double t = sim.time() * 1e9;
+  for (std::size_t k = 0; k < u.size(); ++k) o << t << ',' << surfaces_[k].body_name << ',' << u[k] << '\n';
+}
+
+}  // namespace smpm
