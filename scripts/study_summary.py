@@ -3,6 +3,11 @@
 
 usage: scripts/study_summary.py OUTDIR [OUTDIR ...] [--region I] [--times-ns 1200 1500] [--dir-names]
 
+An OUTDIR without a run.json whose subdirectories seed_<S>/ hold runs (scripts/sweep.sh --seeds)
+is a seed ensemble: its row gives every number as the mean over the seeds and, after "+-", their
+sample standard deviation (the spread of the random sample), and OUTDIR/series_ensemble.csv gets
+every regional statistic of series.csv as mean and spread over the seeds (below).
+
 Columns: porosity and impact speed (run.json); peak of the region's mean pressure and density
 (series.csv); mean temperature of the region at the given times (nearest row); compression-front
 speed and its attenuation (second / first, below); for each region the time the release from the
@@ -31,7 +36,9 @@ record (the front has not met the top, or the release has not reached the region
 """
 import argparse
 import csv
+import glob
 import json
+import math
 import os
 import sys
 
@@ -140,7 +147,105 @@ def summarise(outdir, region, times):
     return out, regions
 
 
+def ensemble_members(outdir):
+    """The seed runs of an ensemble directory (seed_<S>/run.json), in seed order; [] for a run."""
+    if os.path.exists(os.path.join(outdir, "run.json")):
+        return []
+    dirs = [os.path.dirname(p) for p in glob.glob(os.path.join(outdir, "seed_*", "run.json"))]
+
+    def seed_of(d):
+        tail = os.path.basename(d)[len("seed_"):]
+        return (0, int(tail), "") if tail.lstrip("-").isdigit() else (1, 0, tail)
+    return sorted(dirs, key=seed_of)
+
+
+def mean_sd(values):
+    """Mean and sample standard deviation of the finite values (sd NaN for fewer than two)."""
+    v = [x for x in values if x is not None and x == x]
+    if not v:
+        return float("nan"), float("nan")
+    m = sum(v) / len(v)
+    sd = math.sqrt(sum((x - m) ** 2 for x in v) / (len(v) - 1)) if len(v) > 1 else float("nan")
+    return m, sd
+
+
+def interp(t, ts, ys):
+    """Linear interpolation of (ts, ys) at t; NaN outside [ts[0], ts[-1]]."""
+    if not ts or t < ts[0] - 1e-9 or t > ts[-1] + 1e-9:
+        return float("nan")
+    lo, hi = 0, len(ts) - 1
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if ts[mid] <= t:
+            lo = mid
+        else:
+            hi = mid
+    if ts[hi] == ts[lo]:
+        return ys[lo]
+    w = min(max((t - ts[lo]) / (ts[hi] - ts[lo]), 0.0), 1.0)
+    return ys[lo] + w * (ys[hi] - ys[lo])
+
+
+def write_series_ensemble(outdir, members):
+    """OUTDIR/series_ensemble.csv: per region and time, every numeric series.csv column as
+    <column>_mean and <column>_sd over the seeds. Rows are written at the first seed's times
+    (the runs' steps differ, so their row times differ by up to a step; the other seeds are
+    interpolated linearly), up to the earliest end of the seeds' records. n_seeds counts the
+    seeds with a value there."""
+    runs = [read_csv(os.path.join(d, "series.csv")) for d in members]
+    if not runs or not runs[0]:
+        return None
+    cols = [c for c in runs[0][0].keys() if c not in ("time_ns", "region")]
+    by_region = []
+    for rows in runs:
+        reg = {}
+        for r in rows:
+            reg.setdefault(r["region"], []).append(r)
+        by_region.append(reg)
+    t_end = min(float(rows[-1]["time_ns"]) for rows in runs if rows)
+    path = os.path.join(outdir, "series_ensemble.csv")
+    with open(path, "w") as f:
+        f.write(",".join(["time_ns", "region", "n_seeds"] + [f"{c}_{k}" for c in cols for k in ("mean", "sd")]) + "\n")
+        for region, rows0 in by_region[0].items():
+            series = []
+            for reg in by_region:
+                rr = reg.get(region, [])
+                ts = [float(r["time_ns"]) for r in rr]
+                series.append((ts, {c: [float(r[c]) for r in rr] for c in cols}))
+            for r0 in rows0:
+                t = float(r0["time_ns"])
+                if t > t_end + 1e-9:
+                    break
+                cells, n = [], 0
+                for c in cols:
+                    vals = [interp(t, ts, ys[c]) for ts, ys in series]
+                    n = max(n, sum(1 for x in vals if x == x))
+                    m, sd = mean_sd(vals)
+                    cells += [f"{m:.8g}", f"{sd:.8g}"]
+                f.write(",".join([f"{t:.8g}", region, str(n)] + cells) + "\n")
+    return path
+
+
+def aggregate(results):
+    """One row from the rows of an ensemble's seeds: numbers as (mean, sd)."""
+    out = {"seeds": len(results)}
+    for k, v in results[0].items():
+        if k == "release":
+            out[k] = {g: mean_sd([r[k].get(g) for r in results]) for g in v}
+        elif isinstance(v, (int, float)) and not isinstance(v, bool):
+            out[k] = mean_sd([r[k] for r in results])
+        elif k == "t_meet":
+            out[k] = mean_sd([r[k] for r in results])
+        else:
+            out[k] = v
+    out["status"] = ", ".join(sorted({r["status"] for r in results}))
+    return out
+
+
 def fmt(x, f="{:.3g}"):
+    if isinstance(x, tuple):  # an ensemble's (mean, sd)
+        m, sd = x
+        return fmt(m, f) + ("" if sd != sd else " +- " + fmt(sd, f))
     return "n/a" if x is None or x != x else f.format(x)
 
 
@@ -155,8 +260,14 @@ def main():
     results = []
     regions = []
     for od in a.outdirs:
+        members = ensemble_members(od)
         try:
-            r, regs = summarise(od, a.region, a.times_ns)
+            if members:
+                seeds = [summarise(d, a.region, a.times_ns) for d in members]
+                r, regs = aggregate([x[0] for x in seeds]), seeds[0][1]
+                write_series_ensemble(od, members)
+            else:
+                r, regs = summarise(od, a.region, a.times_ns)
         except (OSError, KeyError, ValueError, json.JSONDecodeError) as e:
             print(f"skipping {od}: {e}", file=sys.stderr)
             continue
@@ -170,6 +281,8 @@ def main():
             [f"T {a.region} at {t:g} ns [K]" for t in a.times_ns] +
             ["front speed [m/s] (1st half)", "2nd half", "attenuation"] +
             [f"release at {g} [ns]" for g in regions] + ["particles", "run [min]", "status"])
+    if any("seeds" in r for r in results):
+        head.insert(1, "seeds")
     print("| " + " | ".join(head) + " |")
     print("|" + "---|" * len(head))
     for r in results:
@@ -177,7 +290,9 @@ def main():
                  fmt(r["rho_peak"])] + [fmt(r[f"T_{t:g}"], "{:.0f}") for t in a.times_ns] + \
                 [fmt(r["front1"], "{:.0f}"), fmt(r["front2"], "{:.0f}"), fmt(r["atten"], "{:.3f}")] + \
                 [fmt(r["release"].get(g), "{:.0f}") for g in regions] + \
-                [str(r["particles"]), fmt(r["wall_min"], "{:.1f}"), r["status"]]
+                [fmt(r["particles"], "{:.0f}"), fmt(r["wall_min"], "{:.1f}"), r["status"]]
+        if "seeds" in head:
+            cells.insert(1, str(r.get("seeds", 1)))
         print("| " + " | ".join(cells) + " |")
     return 0
 
