@@ -307,6 +307,7 @@ std::string resolved_case_text(const Scene& scene) {
   if (const auto* lib = t.get_as<std::string>("materials_file_used"))
     o << "# Materials library read: " << lib->get() << "\n";
   t.erase("materials_file_used");
+  t.erase("materials_file");  // the materials are written whole below: the file needs no library
   // each material is written whole: the library entry it started from is a comment, so the file
   // needs no library next to it
   if (auto* mats = t.get_as<toml::table>("materials"))

@@ -236,19 +236,27 @@ TEST_CASE("case: end_time must be positive", "[case]") {
 }
 
 // case_resolved.toml runs again, with no materials library beside it, to the same state.
+// The case a scene resolves to (resolved_case_text), written to a file in a fresh temporary
+// directory and parsed back; the directory is removed again.
+static toml::table resolved_again(const Scene& s, const std::string& tmpname) {
+  const auto tmp = std::filesystem::temp_directory_path() / tmpname;
+  std::filesystem::remove_all(tmp);
+  std::filesystem::create_directories(tmp);
+  {
+    std::ofstream f(tmp / "case_resolved.toml");
+    f << resolved_case_text(s);
+  }
+  auto doc = parse_case_file((tmp / "case_resolved.toml").string());
+  std::filesystem::remove_all(tmp);
+  return doc;
+}
+
 TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
   const std::string dir = std::string(SHOCKMPM_SOURCE_DIR) + "/cases";
   auto doc = parse_case_file(dir + "/quickstart.toml");
   apply_overrides(doc, {"grid.cell_size_um=4.0"});
   Scene a = build_scene(doc, "quickstart", dir);
-  const auto tmp = std::filesystem::temp_directory_path() / "smpm_test_resolved";
-  std::filesystem::remove_all(tmp);
-  std::filesystem::create_directories(tmp);
-  {
-    std::ofstream f(tmp / "case_resolved.toml");
-    f << resolved_case_text(a);
-  }
-  Scene b = build_scene(parse_case_file((tmp / "case_resolved.toml").string()), "again", tmp);
+  Scene b = build_scene(resolved_again(a, "smpm_test_resolved"), "again", ".");
   REQUIRE(a.particles.size() == b.particles.size());
   CHECK(a.particles.x == b.particles.x);
   CHECK(a.particles.y == b.particles.y);
@@ -266,9 +274,25 @@ TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
   CHECK(sa.particles().x == sb.particles().x);
   CHECK(sa.particles().vy == sb.particles().vy);
   CHECK(sa.particles().p == sb.particles().p);
-  std::filesystem::remove_all(tmp);
 }
 
+TEST_CASE("case: a case that names its materials_file resolves to one that builds without it", "[case]") {
+  const std::string dir = std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify";
+  auto doc = parse_case_file(dir + "/porous_iron_free_surface.toml");
+  REQUIRE(doc.contains("materials_file"));
+  Scene a = build_scene(doc, "porous_iron_free_surface", dir);
+  const auto again = resolved_again(a, "smpm_test_resolved_library");
+  CHECK_FALSE(again.contains("materials_file"));
+  Scene b = build_scene(again, "again", ".");
+  REQUIRE(a.particles.size() == b.particles.size());
+  CHECK(a.particles.y == b.particles.y);
+  REQUIRE(a.materials.size() == b.materials.size());
+  for (std::size_t k = 0; k < a.materials.size(); ++k) {
+    CHECK(a.materials[k].rho0 == b.materials[k].rho0);
+    CHECK(a.materials[k].c0 == b.materials[k].c0);
+    CHECK(a.materials[k].Y0 == b.materials[k].Y0);
+  }
+}
 
 TEST_CASE("void-face keys: clear errors", "[case]") {
   const std::string base = std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/porous_strip.toml";
