@@ -23,7 +23,11 @@ Variants (library iron otherwise; docs/validation.md says what each one tests):
                 (phi 0.06 at 3.7 GPa: Y = 2.0 GPa; 0.16 at 1.9 GPa: 1.5 GPa); not a value for
                 iron, a test of whether strength alone can keep the pores open
   no_strength   `strength = "none"`: the hydrodynamic limit
-  no_heating    `heat_fraction = 0`: plastic work does not heat
+  gamma_low, gamma_high  Grueneisen gamma0 1.4 and 2.2 instead of the library's 1.8: the
+                thermal pressure of the hot compacted material, which sets how far below solid
+                density it stays on the compacted Hugoniot (the shock heating enters the
+                mechanics only through gamma; `heat_fraction` changes the temperature, not the
+                motion)
   conduction    `solver.heat_conduction = true` (iron's conductivity, library entry)
   conduction_r20  conduction with voids of radius 20 um at twice the cell size: without
                 conduction this run is the base run scaled by 2 in space and time (see
@@ -33,6 +37,8 @@ Variants (library iron otherwise; docs/validation.md says what each one tests):
   long          a front run of 40 void diameters instead of 15 (the end time and strip grow
                 with it; the fit window is 0.3-0.95 of the end time): whether the front's speed
                 still changes over the run
+  wide          a strip 24 void diameters wide instead of 6: each sample holds 4 times the voids,
+                so the seeds' spread (a small sample's porosity varies along y) should halve
 """
 import argparse
 import json
@@ -55,12 +61,14 @@ VARIANTS = [
      ["--set", "materials.sample.yield_stress_MPa=1750.0", "--set", "materials.sample.hardening_modulus_MPa=6100.0"],
      False),
     ("no_strength", "no strength (hydrodynamic)", ["--set", 'materials.sample.strength="none"'], False),
-    ("no_heating", "plastic work does not heat", ["--set", "materials.sample.heat_fraction=0.0"], False),
+    ("gamma_low", "Grueneisen gamma0 1.4", ["--set", "materials.sample.gruneisen_gamma=1.4"], False),
+    ("gamma_high", "Grueneisen gamma0 2.2", ["--set", "materials.sample.gruneisen_gamma=2.2"], False),
     ("conduction", "heat conduction on", ["--set", "solver.heat_conduction=true"], False),
     ("conduction_r20", "heat conduction, r = 20 um at 2 h",
      ["--set", "solver.heat_conduction=true", "--void-radius-um", "20"], True),
     ("scale_r20", "r = 20 um at 2 h, no conduction", ["--void-radius-um", "20"], True),
     ("long", "front run of 40 void diameters", ["--front-diameters", "40"], False),
+    ("wide", "strip 24 void diameters wide", ["--width-diameters", "24"], False),
 ]
 
 

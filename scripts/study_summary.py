@@ -2,6 +2,7 @@
 """Summary table (markdown) of shockmpm study runs, one row per output directory.
 
 usage: scripts/study_summary.py OUTDIR [OUTDIR ...] [--region I] [--times-ns 1200 1500] [--dir-names]
+                                [--plateau-ns T0 T1]
 
 An OUTDIR without a run.json whose subdirectories seed_<S>/ hold runs (scripts/sweep.sh --seeds)
 is a seed ensemble: its row gives every number as the mean over the seeds and, after "+-", their
@@ -9,7 +10,9 @@ sample standard deviation (the spread of the random sample), and OUTDIR/series_e
 every regional statistic of series.csv as mean and spread over the seeds (below).
 
 Columns: porosity and impact speed (run.json); peak of the region's mean pressure and density
-(series.csv); mean temperature of the region at the given times (nearest row); compression-front
+(series.csv); mean temperature of the region at the given times (nearest row); with --plateau-ns,
+the means over T0-T1 of the region's mean P, T, rho and standard deviations of P and T
+(docs/study.md's plateau values: region II, 1200-1800 ns); compression-front
 speed and its attenuation (second / first, below); for each region the time the release from the
 free top arrives (below); the run's particles and wall time.
 
@@ -100,7 +103,11 @@ def release_time(t, uy, level, t_from):
     return None
 
 
-def summarise(outdir, region, times):
+PLATEAU = [("P_mean_GPa", "P"), ("T_mean_K", "T"), ("rho_mean_gcc", "rho"), ("P_std_GPa", "std P"),
+           ("T_std_K", "std T")]
+
+
+def summarise(outdir, region, times, plateau=None):
     run = json.load(open(os.path.join(outdir, "run.json")))
     body = run["bodies"][0]
     for b in run["bodies"]:
@@ -120,6 +127,10 @@ def summarise(outdir, region, times):
         near = min(rows, key=lambda r: abs(float(r["time_ns"]) - t), default=None)
         ok = near is not None and abs(float(near["time_ns"]) - t) < 0.05 * t
         out[f"T_{t:g}"] = float(near["T_mean_K"]) if ok else float("nan")
+    if plateau:
+        win = [r for r in rows if plateau[0] <= float(r["time_ns"]) <= plateau[1]]
+        for col, _ in PLATEAU:
+            out["plateau_" + col] = sum(float(r[col]) for r in win) / len(win) if win else float("nan")
     front = read_csv(os.path.join(outdir, "front.csv"))
     ft = [float(r["time_ns"]) for r in front]
     fy = [float(r["front_y_um"]) for r in front]
@@ -254,6 +265,8 @@ def main():
     ap.add_argument("outdirs", nargs="+")
     ap.add_argument("--region", default="I")
     ap.add_argument("--times-ns", nargs="+", type=float, default=[1200.0, 1500.0])
+    ap.add_argument("--plateau-ns", nargs=2, type=float, metavar=("T0", "T1"),
+                    help="add the region's means over T0-T1 [ns] of P, T, rho, std P, std T")
     ap.add_argument("--dir-names", action="store_true",
                     help="name each row by its output directory instead of its case (sweeps)")
     a = ap.parse_args()
@@ -263,11 +276,11 @@ def main():
         members = ensemble_members(od)
         try:
             if members:
-                seeds = [summarise(d, a.region, a.times_ns) for d in members]
+                seeds = [summarise(d, a.region, a.times_ns, a.plateau_ns) for d in members]
                 r, regs = aggregate([x[0] for x in seeds]), seeds[0][1]
                 write_series_ensemble(od, members)
             else:
-                r, regs = summarise(od, a.region, a.times_ns)
+                r, regs = summarise(od, a.region, a.times_ns, a.plateau_ns)
         except (OSError, KeyError, ValueError, json.JSONDecodeError) as e:
             print(f"skipping {od}: {e}", file=sys.stderr)
             continue
@@ -279,6 +292,8 @@ def main():
         return 1
     head = (["case", "porosity", "v [m/s]", f"peak P {a.region} [GPa]", f"peak rho {a.region} [g/cc]"] +
             [f"T {a.region} at {t:g} ns [K]" for t in a.times_ns] +
+            ([f"{lab} {a.region} {a.plateau_ns[0]:g}-{a.plateau_ns[1]:g} ns" for _, lab in PLATEAU]
+             if a.plateau_ns else []) +
             ["front speed [m/s] (1st half)", "2nd half", "attenuation"] +
             [f"release at {g} [ns]" for g in regions] + ["particles", "run [min]", "status"])
     if any("seeds" in r for r in results):
@@ -288,6 +303,7 @@ def main():
     for r in results:
         cells = [r["case"], fmt(r["porosity"], "{:.3f}"), fmt(r["v"], "{:.0f}"), fmt(r["P_peak"]),
                  fmt(r["rho_peak"])] + [fmt(r[f"T_{t:g}"], "{:.0f}") for t in a.times_ns] + \
+                ([fmt(r["plateau_" + col], "{:.4g}") for col, _ in PLATEAU] if a.plateau_ns else []) + \
                 [fmt(r["front1"], "{:.0f}"), fmt(r["front2"], "{:.0f}"), fmt(r["atten"], "{:.3f}")] + \
                 [fmt(r["release"].get(g), "{:.0f}") for g in regions] + \
                 [fmt(r["particles"], "{:.0f}"), fmt(r["wall_min"], "{:.1f}"), r["status"]]
