@@ -406,6 +406,8 @@ def measure(out, up_km_s, t_end, height, r, case_path, sets):
     # single front
     rb = res["behind_rho_bulk_g_cm3"] * 1e3
     res["Us_mass_balance_km_s"] = up * rb / (rb - rho00) * 1e-3 if rb > rho00 else math.nan
+    # and momentum: the stress behind carries the sample from rest to up, P = rho00 Us up
+    res["Us_momentum_km_s"] = res["behind_P_long_GPa"] * 1e9 / (rho00 * up) * 1e-3
     return res
 
 
@@ -480,18 +482,19 @@ def write_markdown(path, doc):
              "and the points' own density); the compacted Hugoniot's. Us from rho bulk behind: "
              "up rho_b / (rho_b - rho00), what mass conservation gives for that density (a steady single "
              "front, the material behind at rest): where it differs from the fitted Us, the wave is not one "
-             "steady front over the fit window.\n")
+             "steady front over the fit window. Us from -sigma_yy behind: P / (rho00 up), what momentum "
+             "conservation gives for that stress.\n")
     L.append("| row | P measured [GPa] | P jump | -sigma_yy behind | P compacted | "
              "rho measured [g/cm^3] | rho jump | rho bulk behind | rho of the points | rho compacted | "
-             "Us from rho bulk behind [km/s] | porosity (target / sample) |")
-    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|")
+             "Us from rho bulk behind [km/s] | Us from -sigma_yy behind [km/s] | porosity (target / sample) |")
+    L.append("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in doc["rows"]:
         b = r["behind"]
         L.append(f"| {r['index']} | {r['P_GPa']:g} | {fmt(b['P_jump_GPa'], '{:.2f}')} | "
                  f"{fmt(b['behind_P_long_GPa'], '{:.2f}')} | {fmt(b['compacted_P_GPa'], '{:.2f}')} | "
                  f"{r['rho_g_cm3']:g} | {fmt(b['rho_jump_g_cm3'])} | {fmt(b['behind_rho_bulk_g_cm3'])} | "
                  f"{fmt(b['behind_rho_points_g_cm3'])} | {fmt(b['compacted_rho_g_cm3'])} | "
-                 f"{fmt(b['Us_mass_balance_km_s'])} | "
+                 f"{fmt(b['Us_mass_balance_km_s'])} | {fmt(b['Us_momentum_km_s'])} | "
                  f"{r['porosity_target']:.4f} / {fmt(b['porosity'], '{:.4f}')} |")
     strips = [f"row {r['index']} {r['strip']['width_um']:g} x {r['strip']['height_um']:g}, {r['strip']['end_time_ns']:.0f}"
               for r in doc["rows"] if r.get("strip")]
@@ -721,7 +724,7 @@ def main():
             u2 = rec["engine_Us_km_s"]
             rec["resolution_change_pct"] = 100.0 * abs(u1 - u2) / u2
             rec["resolution_h_um"] = [a.hs[-2], a.hs[-1]]
-        keys = ["Us_mass_balance_km_s", "P_jump_GPa", "rho_jump_g_cm3", "behind_P_long_GPa", "behind_p_GPa", "behind_rho_bulk_g_cm3",
+        keys = ["Us_mass_balance_km_s", "Us_momentum_km_s", "P_jump_GPa", "rho_jump_g_cm3", "behind_P_long_GPa", "behind_p_GPa", "behind_rho_bulk_g_cm3",
                 "behind_rho_points_g_cm3", "behind_Uy_m_s", "behind_T_K", "compacted_P_GPa", "compacted_rho_g_cm3",
                 "porosity", "swept_porosity", "compacted_swept_Us_km_s", "rho0_library_g_cm3", "rho00_engine_g_cm3"]
         rec["behind"] = {k: mean_std([x.get(k, math.nan) for x in fine["runs"]])[0] for k in keys}
