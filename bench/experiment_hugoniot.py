@@ -3,7 +3,7 @@
 
   /usr/bin/python3 bench/experiment_hugoniot.py [--data bench/data/porous_iron_hugoniot.csv]
       [--out DIR] [--dim 2] [--h 4,2] [--seeds 3] [--void-radius-um 10] [--material iron]
-      [--rows 0,3] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
+      [--rows 0,3] [--coarse-rows 8] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
       [--quick] [--check PCT] [--dry-run]
 
 The data file: CSV, comment lines start with '#', columns
@@ -80,7 +80,9 @@ distention). Runs are cached under DIR/runs/<key> (key: the case text, the overr
 driver binary's hash): a rerun only runs what changed. A failed run is reported, the rest go on,
 and the exit status is 1.
 
---quick: one row (the first, or the first of --rows), one seed, the coarsest h. --check PCT: exit 1
+--coarse-rows LIST: rows run at the coarsest h only, for a row whose finest-h runs cost too much
+(the engine's Us of such a row is from the coarsest h, no resolution change is given, and the
+table says so). --quick: one row (the first, or the first of --rows), one seed, the coarsest h. --check PCT: exit 1
 when a row's |Us error| against its measured Us exceeds PCT per cent (tests/experiment_quick.sh).
 --dry-run: print the planned runs (strip, end time, particles, steps) and run nothing.
 """
@@ -464,6 +466,8 @@ def write_markdown(path, doc):
         rc = "n/a" if res is None else f"{res:.1f} % ({'yes' if res <= CONVERGED_PCT else 'no'})"
         spread = r["engine_Us_spread_km_s"]
         eng = fmt(r["engine_Us_km_s"]) + ("" if spread is None else f" +- {spread:.3f}")
+        if r.get("engine_h_um") is not None and r["engine_h_um"] != hs[-1]:
+            eng += f" (h = {r['engine_h_um']:g} um only)"
         L.append(f"| {r['index']} | {r['m']:g} | {r['up_km_s']:g} | {r['Us_km_s']:g} | {eng} | {rc} | "
                  f"{fmt(r['compacted_Us_km_s'])} | {pct(r['engine_error_pct'])} | {pct(r['compacted_error_pct'])} | "
                  f"{pct(r.get('engine_vs_swept_pct'))}"
@@ -572,6 +576,8 @@ def main():
                     help="strip width [void diameters] (at least 10 cells of the coarsest h)")
     ap.add_argument("--material", default="iron", help="base entry of cases/materials.toml")
     ap.add_argument("--rows", default="", help="data rows to run, 0-based, comma-separated (default all)")
+    ap.add_argument("--coarse-rows", default="",
+                    help="rows run at the coarsest h only (their engine Us is from it; the table says so)")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                     help="a case override for every run, e.g. materials.sample.yield_stress_MPa=300 (repeatable)")
     ap.add_argument("--driver", default=os.path.join(ROOT, "build", "shockmpm"))
@@ -612,6 +618,11 @@ def main():
             if bad:
                 raise DataError(f"--rows {a.rows}: row(s) {', '.join(map(str, bad))} not in {a.data} "
                                 f"({len(data)} rows, 0-based)")
+        a.coarse_rows = parse_list(a.coarse_rows, int, "--coarse-rows") if a.coarse_rows else []
+        bad = [i for i in a.coarse_rows if i not in idx]
+        if bad:
+            raise DataError(f"--coarse-rows {','.join(map(str, a.coarse_rows))}: row(s) "
+                            f"{', '.join(map(str, bad))} are not among the rows run")
         if a.quick:
             idx, a.hs, a.seeds = idx[:1], a.hs[:1], 1
         a.step = common_step(a.hs)
@@ -645,6 +656,8 @@ def main():
                         "width_diameters": a.width_diameters,
                         "compacted_front_wall_frame_m_s_sizing": uc, "front_diameters": a.front_diameters}
         for h in a.hs:
+            if i in a.coarse_rows and h != a.hs[0]:
+                continue
             rec["by_h"][f"{h:g}"] = {"runs": []}
             for seed in range(1, a.seeds + 1):
                 text = case_text(row, i, a, h, seed, width, height, t_end)
@@ -708,9 +721,10 @@ def main():
                  if math.isfinite(x.get("compacted_swept_Us_km_s", math.nan))])
             for x in hh["runs"]:
                 commit, dirty = commit or x["git_commit"], dirty or x["git_dirty"]
-        fine = rec["by_h"].get(f"{a.hs[-1]:g}", {"runs": []})
+        h_row = a.hs[0] if rec["index"] in a.coarse_rows else a.hs[-1]
+        fine = rec["by_h"].get(f"{h_row:g}", {"runs": []})
         ok = bool(fine["runs"])
-        rec["engine_h_um"] = a.hs[-1]
+        rec["engine_h_um"] = h_row
         rec["engine_Us_km_s"] = fine.get("Us_km_s_mean", math.nan) if ok else math.nan
         rec["engine_Us_spread_km_s"] = fine.get("Us_km_s_std", math.nan) if ok else math.nan
         rec["compacted_Us_km_s"] = fine.get("compacted_Us_km_s_mean", math.nan) if ok else math.nan
@@ -719,7 +733,7 @@ def main():
         rec["engine_vs_swept_spread_pct"] = fine.get("vs_swept_pct_std", math.nan) if ok else math.nan
         rec["compacted_error_pct"] = 100.0 * (rec["compacted_Us_km_s"] / rec["Us_km_s"] - 1.0)
         rec["resolution_change_pct"] = math.nan
-        if len(a.hs) >= 2:
+        if len(a.hs) >= 2 and rec["index"] not in a.coarse_rows:
             u1 = rec["by_h"].get(f"{a.hs[-2]:g}", {}).get("Us_km_s_mean", math.nan)
             u2 = rec["engine_Us_km_s"]
             rec["resolution_change_pct"] = 100.0 * abs(u1 - u2) / u2
