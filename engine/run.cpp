@@ -33,6 +33,79 @@ namespace smpm {
 
 namespace {
 
+// series.csv and series.h5: one entry per column, in file order. The CSV header, each row, the
+// HDF5 table's columns and units, and the checkpoint's keys ("series/<name>") all come from it.
+struct SeriesColumn {
+  const char* name;
+  const char* unit;
+  double (*value)(double t, std::size_t region, const RegionStats& st);
+};
+constexpr double kPerUs2 = 1e-12;  // 1/s^2 -> 1/us^2
+constexpr SeriesColumn kSeriesColumns[] = {
+    {"time_ns", "ns", [](double t, std::size_t, const RegionStats&) { return t * 1e9; }},
+    {"region", "index into the regions attribute", [](double, std::size_t r, const RegionStats&) { return double(r); }},
+    {"count", "1", [](double, std::size_t, const RegionStats& s) { return double(s.count); }},
+    {"P_mean_GPa", "GPa", [](double, std::size_t, const RegionStats& s) { return s.P.mean * 1e-9; }},
+    {"P_std_GPa", "GPa", [](double, std::size_t, const RegionStats& s) { return s.P.std * 1e-9; }},
+    {"T_mean_K", "K", [](double, std::size_t, const RegionStats& s) { return s.T.mean; }},
+    {"T_std_K", "K", [](double, std::size_t, const RegionStats& s) { return s.T.std; }},
+    {"rho_mean_gcc", "g/cc", [](double, std::size_t, const RegionStats& s) { return s.rho.mean * 1e-3; }},
+    {"rho_std_gcc", "g/cc", [](double, std::size_t, const RegionStats& s) { return s.rho.std * 1e-3; }},
+    {"Uy_mean_ms", "m/s", [](double, std::size_t, const RegionStats& s) { return s.Uy.mean; }},
+    {"Uy_std_ms", "m/s", [](double, std::size_t, const RegionStats& s) { return s.Uy.std; }},
+    {"R2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.R2 * kPerUs2; }},
+    {"D2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.D2 * kPerUs2; }},
+    {"S2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.S2 * kPerUs2; }},
+    {"P_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.P.skew; }},
+    {"P_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.P.kurt; }},
+    {"T_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.T.skew; }},
+    {"T_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.T.kurt; }},
+    {"rho_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.rho.skew; }},
+    {"rho_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.rho.kurt; }},
+    {"Uy_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.Uy.skew; }},
+    {"Uy_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.Uy.kurt; }},
+    {"R_mean_per_us", "1/us", [](double, std::size_t, const RegionStats& s) { return s.R * 1e-6; }},
+    {"D_mean_per_us", "1/us", [](double, std::size_t, const RegionStats& s) { return s.D * 1e-6; }},
+    {"open_porosity", "1", [](double, std::size_t, const RegionStats& s) { return s.open; }},
+};
+constexpr std::size_t kSeriesRegionColumn = 1;  // written as the region's name in series.csv
+
+// energy.csv: one entry per column, in file order (header and row)
+struct EnergyRow {
+  double t;
+  Simulation::Energy e;
+  std::array<double, 2> q;
+  Simulation::Removed removed;
+  double residual;
+};
+struct EnergyColumn {
+  const char* name;
+  double (*value)(const EnergyRow& r);
+};
+constexpr EnergyColumn kEnergyColumns[] = {
+    {"time_ns", [](const EnergyRow& r) { return r.t * 1e9; }},
+    {"kinetic_J_per_m", [](const EnergyRow& r) { return r.e.kinetic; }},
+    {"internal_J_per_m", [](const EnergyRow& r) { return r.e.internal; }},
+    {"total_J_per_m", [](const EnergyRow& r) { return r.e.total(); }},
+    {"momentum_x_kg_m_s_per_m", [](const EnergyRow& r) { return r.q[0]; }},
+    {"momentum_y_kg_m_s_per_m", [](const EnergyRow& r) { return r.q[1]; }},
+    {"wall_removed_J_per_m", [](const EnergyRow& r) { return r.removed.wall; }},
+    {"contact_removed_J_per_m", [](const EnergyRow& r) { return r.removed.contact; }},
+    {"residual_J_per_m", [](const EnergyRow& r) { return r.residual; }},
+};
+
+// "a,b,c\n" from a column list's names
+template <class Columns>
+std::string csv_header(const Columns& cols) {
+  std::string h;
+  for (const auto& c : cols) {
+    if (!h.empty()) h += ',';
+    h += c.name;
+  }
+  h += '\n';
+  return h;
+}
+
 // The signal that asked the run to stop (SIGINT or SIGTERM; 0: none): the run stops after the
 // current step and writes its last state, as for a batch scheduler's SIGTERM.
 std::atomic<int> g_stop_signal{0};
@@ -430,17 +503,13 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   };
   // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
   std::ofstream series;
-  open_csv(series, out / "series.csv",
-           "time_ns,region,count,P_mean_GPa,P_std_GPa,T_mean_K,T_std_K,rho_mean_gcc,rho_std_gcc,Uy_mean_ms,"
-           "Uy_std_ms,R2_mean_per_us2,D2_mean_per_us2,S2_mean_per_us2,P_skew,P_kurt,T_skew,T_kurt,rho_skew,"
-           "rho_kurt,Uy_skew,Uy_kurt,R_mean_per_us,D_mean_per_us,open_porosity\n",
-           resume);
+  open_csv(series, out / "series.csv", csv_header(kSeriesColumns).c_str(), resume);
   series << std::setprecision(8);
-  const std::vector<std::string> columns{"time_ns", "region", "count", "P_mean_GPa", "P_std_GPa", "T_mean_K",
-                                         "T_std_K", "rho_mean_gcc", "rho_std_gcc", "Uy_mean_ms", "Uy_std_ms",
-                                         "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2", "P_skew", "P_kurt",
-                                         "T_skew", "T_kurt", "rho_skew", "rho_kurt", "Uy_skew", "Uy_kurt",
-                                         "R_mean_per_us", "D_mean_per_us", "open_porosity"};
+  std::vector<std::string> columns, units;
+  for (const auto& c : kSeriesColumns) {
+    columns.emplace_back(c.name);
+    units.emplace_back(c.unit);
+  }
   std::vector<std::vector<double>> table(columns.size());
   if (resume)
     for (std::size_t c = 0; c < columns.size(); ++c) resume->get("series/" + columns[c], table[c]);
@@ -451,17 +520,11 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material(),
                                     sim.gradient_current());
     for (std::size_t r = 0; r < stats.size(); ++r) {
-      const auto& st = stats[r];
-      const double us2 = 1e-12;  // 1/s^2 -> 1/us^2
-      const std::vector<double> row{sim.time() * 1e9, double(r), double(st.count), st.P.mean * 1e-9, st.P.std * 1e-9,
-                                    st.T.mean, st.T.std, st.rho.mean * 1e-3, st.rho.std * 1e-3, st.Uy.mean, st.Uy.std,
-                                    st.R2 * us2, st.D2 * us2, st.S2 * us2, st.P.skew, st.P.kurt, st.T.skew, st.T.kurt,
-                                    st.rho.skew, st.rho.kurt, st.Uy.skew, st.Uy.kurt, st.R * 1e-6, st.D * 1e-6,
-                                    st.open};
-      for (std::size_t c = 0; c < row.size(); ++c) {
-        table[c].push_back(row[c]);
-        if (c == 1) series << ',' << scene.regions[r].name;
-        else series << (c ? "," : "") << row[c];
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        const double v = kSeriesColumns[c].value(sim.time(), r, stats[r]);
+        table[c].push_back(v);
+        if (c == kSeriesRegionColumn) series << ',' << scene.regions[r].name;
+        else series << (c ? "," : "") << v;
       }
       series << '\n';
     }
@@ -469,9 +532,15 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   };
   auto write_series_h5 = [&] {
     Timed t(s.output_seconds);
+    std::string unit_list;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      if (c) unit_list += ", ";
+      unit_list += columns[c];
+      unit_list += ' ';
+      unit_list += units[c];
+    }
     write_table_h5(out / "series.h5", "series", columns, table,
-                   {{"regions", region_names}, {"region_column", "index into the regions attribute"},
-                    {"units", "time ns, P GPa, T K, rho g/cc, Uy m/s, R2 D2 S2 1/us^2, R D 1/us, open_porosity 1"}});
+                   {{"regions", region_names}, {"region_column", units[kSeriesRegionColumn]}, {"units", unit_list}});
   };
   const double vy0 = scene.bodies[target].vy0;
   std::ofstream front;
@@ -490,10 +559,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     }
   };
   std::ofstream energy;
-  open_csv(energy, out / "energy.csv",
-           "time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,momentum_y_kg_m_s_per_m,"
-           "wall_removed_J_per_m,contact_removed_J_per_m,residual_J_per_m\n",
-           resume);
+  open_csv(energy, out / "energy.csv", csv_header(kEnergyColumns).c_str(), resume);
   const double E0 = resume ? resume->number("run/E0") : sim.energy().total();
   // gauges.csv and freesurface.csv: the points followed from t = 0 (engine/gauges.hpp), with
   // energy.csv's rows
@@ -528,13 +594,12 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
   }
   auto write_energy = [&] {
     Timed t(s.diagnostics_seconds);
-    const auto e = sim.energy();
-    const auto q = sim.momentum();
-    const auto& r = sim.removed();
+    EnergyRow row{sim.time(), sim.energy(), sim.momentum(), sim.removed(), 0.0};
     // residual: the scheme's own energy error, what is neither in the total nor removed as loss
-    const double lost = sim.removed_is_heat() ? 0.0 : r.wall + r.contact;
-    energy << sim.time() * 1e9 << ',' << e.kinetic << ',' << e.internal << ',' << e.total() << ',' << q[0] << ','
-           << q[1] << ',' << r.wall << ',' << r.contact << ',' << e.total() + lost - E0 << '\n';
+    const double lost = sim.removed_is_heat() ? 0.0 : row.removed.wall + row.removed.contact;
+    row.residual = row.e.total() + lost - E0;
+    for (std::size_t c = 0; c < std::size(kEnergyColumns); ++c) energy << (c ? "," : "") << kEnergyColumns[c].value(row);
+    energy << '\n';
     flush_checked(energy, out / "energy.csv");
   };
   s.status = "running";

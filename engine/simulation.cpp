@@ -437,9 +437,8 @@ void Simulation::save(CheckpointWriter& w) const {
   w.put("sim/fields", fields);
   w.put("sim/steps", std::int64_t{steps_});
   w.put("sim/gradient_step", std::int64_t{gradient_step_});
-  const std::vector<double> scalars{time_, dt_, last_dt_, max_speed_, box_nodes_, removed_.wall, removed_.contact,
-                                    wall_.left, wall_.right, wall_.bottom, wall_.top, times_.sort, times_.p2g,
-                                    times_.grid, times_.contact, times_.g2p, times_.constitutive, times_.heat};
+  std::vector<double> scalars;
+  for (const double* x : checkpoint_scalars(*this)) scalars.push_back(*x);
   w.put("sim/scalars", scalars);
 }
 
@@ -460,12 +459,11 @@ void Simulation::restore(const CheckpointReader& r) {
   gradient_step_ = r.integer("sim/gradient_step");
   std::vector<double> v;
   r.get("sim/scalars", v);
-  if (v.size() != 18) throw CheckpointError("checkpoint " + r.file().string() + ": sim/scalars has " +
-                                            std::to_string(v.size()) + " values, expected 18");
-  time_ = v[0], dt_ = v[1], last_dt_ = v[2], max_speed_ = v[3], box_nodes_ = v[4];
-  removed_ = {v[5], v[6]};
-  wall_ = {v[7], v[8], v[9], v[10]};
-  times_ = {v[11], v[12], v[13], v[14], v[15], v[16], v[17]};
+  const auto slots = checkpoint_scalars(*this);
+  if (v.size() != slots.size())
+    throw CheckpointError("checkpoint " + r.file().string() + ": sim/scalars has " + std::to_string(v.size()) +
+                          " values, expected " + std::to_string(slots.size()));
+  for (std::size_t k = 0; k < slots.size(); ++k) *slots[k] = v[k];
 }
 
 std::array<double, 2> Simulation::momentum() const {

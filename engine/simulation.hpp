@@ -217,6 +217,16 @@ class Simulation {
   long gradient_step_ = 0;  // the step count after the last step that stored L
   WallForces wall_;
   PhaseTimes times_;
+
+  // The scalars a checkpoint keeps, in the order of its record "sim/scalars": save() and
+  // restore() both read this one list (double* for a Simulation, const double* for a const one).
+  template <class Self>
+  static auto checkpoint_scalars(Self& s) {
+    return std::array{&s.time_,       &s.dt_,          &s.last_dt_,     &s.max_speed_,   &s.box_nodes_,
+                      &s.removed_.wall, &s.removed_.contact, &s.wall_.left, &s.wall_.right, &s.wall_.bottom,
+                      &s.wall_.top,   &s.times_.sort,  &s.times_.p2g,   &s.times_.grid,  &s.times_.contact,
+                      &s.times_.g2p,  &s.times_.constitutive, &s.times_.heat};
+  }
 };
 
 }  // namespace smpm

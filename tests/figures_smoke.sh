@@ -5,7 +5,8 @@
 # snapshot it does not name), run the script on them and check that every
 # expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, and the
 # exit statuses (0 written, 1 nothing made, 2 bad arguments). series.csv's columns are the
-# engine's own: the header is read from a one-step run of the driver on the quick-start case.
+# engine's own: the headers of series.csv and energy.csv are read from a one-step run of the
+# driver on the quick-start case.
 #
 # usage: tests/figures_smoke.sh [SHOCKMPM [SOURCE_DIR]]   (default build/shockmpm of the source
 #        tree; FIGURES_SMOKE_KEEP=1 keeps the temp directory)
@@ -35,8 +36,9 @@ if ! "$EXE" run "$ROOT/cases/quickstart.toml" --quiet --threads 1 --out "$TMP/en
   exit 1
 fi
 SERIES_HEADER="$(head -n 1 "$TMP/engine/series.csv")"
+ENERGY_HEADER="$(head -n 1 "$TMP/engine/energy.csv")"
 
-"$PY" - "$TMP" "$SERIES_HEADER" <<'EOF'
+"$PY" - "$TMP" "$SERIES_HEADER" "$ENERGY_HEADER" <<'EOF'
 import json, os, sys
 import h5py
 import numpy as np
@@ -96,11 +98,12 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
                     p = 15.0 if 2 * y < t < 300 else 0.0
                     f.write(f"{t},{g},10,{y},0,{-speed},{-p},{-p},0,{p},2.7,300\n")
     with open(os.path.join(outdir, "energy.csv"), "w") as f:
-        f.write("time_ns,kinetic_J_per_m,internal_J_per_m,total_J_per_m,momentum_x_kg_m_s_per_m,"
-                "momentum_y_kg_m_s_per_m\n")
+        f.write(",".join(energy_columns) + "\n")  # the engine's header (a one-step run)
         for t in np.arange(0.0, 501.0, 20.0):
             ek = 100 * (1 - t / 1000)
-            f.write(f"{t},{ek},{100 - ek},{100.0},0,{-0.2 * ek / 100}\n")
+            val = {"time_ns": t, "kinetic_J_per_m": ek, "internal_J_per_m": 100 - ek, "total_J_per_m": 100.0,
+                   "momentum_y_kg_m_s_per_m": -0.2 * ek / 100}
+            f.write(",".join(str(val.get(c, 0.0)) for c in energy_columns) + "\n")
 
     def snapshot(step, t_ns, n=600):
         front = 1.5 * t_ns
@@ -159,6 +162,9 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
 
 tmp = sys.argv[1]
 columns = sys.argv[2].strip().split(",")
+energy_columns = sys.argv[3].strip().split(",")
+if not {"time_ns", "kinetic_J_per_m", "internal_J_per_m", "total_J_per_m"} <= set(energy_columns):
+    sys.exit(f"figures_smoke: the engine's energy.csv header lacks the energy columns: {energy_columns}")
 need = {"time_ns", "region", "P_mean_GPa", "P_std_GPa", "T_mean_K", "rho_mean_gcc", "Uy_mean_ms",
         "R2_mean_per_us2", "D2_mean_per_us2", "S2_mean_per_us2"}
 if not need <= set(columns):
