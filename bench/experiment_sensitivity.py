@@ -37,6 +37,8 @@ Variants (library iron otherwise; docs/validation.md says what each one tests):
   long          a front run of 40 void diameters instead of 15 (the end time and strip grow
                 with it; the fit window is 0.3-0.95 of the end time): whether the front's speed
                 still changes over the run
+  wide          a strip 24 void diameters wide instead of 6: each sample holds 4 times the voids,
+                so the seeds' spread (a small sample's porosity varies along y) should shrink
 """
 import argparse
 import json
@@ -66,6 +68,7 @@ VARIANTS = [
      ["--set", "solver.heat_conduction=true", "--void-radius-um", "20"], True),
     ("scale_r20", "r = 20 um at 2 h, no conduction", ["--void-radius-um", "20"], True),
     ("long", "front run of 40 void diameters", ["--front-diameters", "40"], False),
+    ("wide", "strip 24 void diameters wide", ["--width-diameters", "24"], False),
 ]
 
 
