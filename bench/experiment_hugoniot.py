@@ -103,8 +103,6 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import compaction_hugoniot  # noqa: E402  (swept_porosity, hugoniot_at)
 
-_DRIVER = [""]  # the driver binary, for `check` at the swept porosity
-
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 MATERIALS = os.path.join(ROOT, "cases", "materials.toml")
 COLUMNS = ["m", "rho00_g_cm3", "up_km_s", "Us_km_s", "P_GPa", "rho_g_cm3", "source"]
@@ -306,7 +304,7 @@ def read_csv(path):
         return list(csv.DictReader(f))
 
 
-def measure(out, up_km_s, t_end, height, r, case_path, sets):
+def measure(out, up_km_s, t_end, height, r, case_path, driver, sets):
     """The run's front and state behind it (see the module's docstring). Raises on a run that
     cannot be measured, with the reason."""
     run = json.load(open(os.path.join(out, "run.json")))
@@ -373,7 +371,7 @@ def measure(out, up_km_s, t_end, height, r, case_path, sets):
     res["swept_porosity"] = phi_sw
     res["compacted_swept_Us_km_s"] = math.nan
     if res["porosity"] > 0.0 and math.isfinite(phi_sw) and 0.0 < phi_sw < 1.0:
-        front_sw, _ = compaction_hugoniot.hugoniot_at(_DRIVER[0], case_path, sets, phi_sw)
+        front_sw, _ = compaction_hugoniot.hugoniot_at(driver, case_path, sets, phi_sw)
         res["compacted_swept_Us_km_s"] = (front_sw + up) * 1e-3
     elif c is not None:
         res["compacted_swept_Us_km_s"] = res["compacted_Us_km_s"]
@@ -630,7 +628,6 @@ def main():
         print(f"error: {e}", file=sys.stderr)
         return 2
     a.driver = os.path.abspath(a.driver)
-    _DRIVER[0] = a.driver
     a.out = os.path.abspath(a.out)
     os.makedirs(os.path.join(a.out, "cases"), exist_ok=True)
     os.makedirs(os.path.join(a.out, "runs"), exist_ok=True)
@@ -690,7 +687,7 @@ def main():
                 with open(os.path.join(a.out, "runs", os.path.basename(out) + ".stderr"), "w") as f:
                     f.write(p.stderr)
         try:
-            res = measure(out, row["up_km_s"], t_end, height, r, path, sets)
+            res = measure(out, row["up_km_s"], t_end, height, r, path, a.driver, sets)
         except (OSError, KeyError, ValueError, IndexError, TypeError, ZeroDivisionError) as e:
             why = str(e)
             if not cached:

@@ -35,6 +35,9 @@ import math
 import os
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts"))
+from study_summary import mean_sd  # noqa: E402  (mean and sample standard deviation of the finite values)
+
 
 def rows(path):
     with open(path) as f:
@@ -91,14 +94,6 @@ def measure(out, drive, t0, t1):
     return {"run": out, "L_um": L, "rho00": rho00, "P_GPa": P * 1e-9, "up_m_s": up, "u_fs_final_m_s": u_final,
             "t10_ns": t10, "t50_ns": t50, "Us_foot": L / t10, "Us_mid": L / t50, "Us_gauges": us_g,
             "Us_momentum": P / (rho00 * up) * 1e-3, "gauges_used": len(pts)}
-
-
-def mean_sd(x):
-    x = [v for v in x if math.isfinite(v)]
-    if not x:
-        return math.nan, math.nan
-    m = sum(x) / len(x)
-    return m, (math.sqrt(sum((v - m) ** 2 for v in x) / (len(x) - 1)) if len(x) > 1 else math.nan)
 
 
 def main():
