@@ -9,9 +9,7 @@
 
 #include <omp.h>
 
-// Everything called per particle inside a vectorized particle loop is forced inline: GCC 12
-// kept such calls out of line otherwise (measured with perf), and a call keeps a loop scalar.
-#define SMPM_INLINE [[gnu::always_inline]] inline
+#include "tensor.hpp"
 
 namespace smpm::kern {
 

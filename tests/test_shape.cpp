@@ -5,6 +5,7 @@
 #include <random>
 
 #include "kernels/shape.hpp"
+#include "kernels/stencil.hpp"
 
 using namespace smpm::kern;
 
@@ -94,4 +95,74 @@ TEST_CASE("weights against hand-computed values", "[shape]") {
   CHECK(w[0] == Approx(0.75));
   CHECK(w[1] == Approx(0.25));
   CHECK(w[2] == Approx(0.0).margin(1e-15));
+}
+
+// The D-axis stencil: weights sum to one and gradients to zero, it reproduces linear fields
+// (sum_i w_i x_i = x_p, sum_i x_i g_i^T = I), and every weight and gradient is bitwise the
+// product in axis order of the 1D values, in 2D and 3D.
+template <class S, int D>
+void check_stencil(double lp) {
+  std::mt19937_64 rng(777);
+  std::uniform_real_distribution<double> U(2.0, 50.0);
+  for (int k = 0; k < 2000; ++k) {
+    Vec<D> x;
+    for (int d = 0; d < D; ++d) x[d] = U(rng);
+    const Stencil<S, D> st(x, lp);
+    double sw = 0, sg[D] = {}, sx[D] = {}, sxg[D][D] = {};
+    st.for_each([&](const Idx<D>& a, int) {
+      const double w = st.weight(a);
+      double prod = st.w[0][a[0]];
+      for (int d = 1; d < D; ++d) prod = prod * st.w[d][a[d]];
+      REQUIRE(w == prod);
+      sw += w;
+      for (int d = 0; d < D; ++d) {
+        const double g = st.grad(a, d);
+        double gp = d == 0 ? st.dw[0][a[0]] : st.w[0][a[0]];
+        for (int e = 1; e < D; ++e) gp = gp * (e == d ? st.dw[e][a[e]] : st.w[e][a[e]]);
+        REQUIRE(g == gp);
+        sg[d] += g;
+        sx[d] += w * (st.base[d] + a[d]);
+        for (int e = 0; e < D; ++e) sxg[d][e] += (st.base[d] + a[d]) * st.grad(a, e);
+      }
+    });
+    REQUIRE(sw == Approx(1.0).margin(1e-13));
+    for (int d = 0; d < D; ++d) {
+      REQUIRE(sg[d] == Approx(0.0).margin(1e-12));
+      REQUIRE(sx[d] == Approx(x[d]).epsilon(1e-13));
+      for (int e = 0; e < D; ++e) REQUIRE(sxg[d][e] == Approx(d == e ? 1.0 : 0.0).margin(1e-11));
+      REQUIRE(st.offset(Stencil<S, D>::digits(0), d) == (st.base[d] - x[d]));
+    }
+  }
+}
+
+TEST_CASE("stencil: partition of unity, gradients, linear reproduction in 2D and 3D", "[shape]") {
+  check_stencil<Linear, 2>(0.0);
+  check_stencil<UGIMP, 2>(0.25);
+  check_stencil<QuadraticBSpline, 2>(0.0);
+  check_stencil<CubicBSpline, 2>(0.0);
+  check_stencil<Linear, 3>(0.0);
+  check_stencil<UGIMP, 3>(0.25);
+  check_stencil<QuadraticBSpline, 3>(0.0);
+  check_stencil<CubicBSpline, 3>(0.0);
+}
+
+TEST_CASE("symmetric and spin parts: component order and values", "[shape]") {
+  STATIC_REQUIRE(sym_index(2, 0, 1) == 2);
+  STATIC_REQUIRE(sym_index(3, 0, 1) == 3);
+  STATIC_REQUIRE(sym_index(3, 2, 0) == 4);
+  STATIC_REQUIRE(sym_index(3, 1, 2) == 5);
+  for (int D : {2, 3})
+    for (int k = 0; k < sym_size(D); ++k) REQUIRE(sym_index(D, sym_row(D, k), sym_col(D, k)) == k);
+  Mat<3> L{{{1, 2, 3}, {4, 5, 6}, {7, 8, 9}}};
+  const Sym<3> s = sym_part(L);
+  const Spin<3> w = spin_part(L);
+  REQUIRE(s[0] == 1);
+  REQUIRE(s[2] == 9);
+  REQUIRE(s[3] == 3);  // (2 + 4) / 2
+  REQUIRE(s[4] == 5);  // (3 + 7) / 2
+  REQUIRE(s[5] == 7);  // (6 + 8) / 2
+  REQUIRE(w[0] == -1);
+  REQUIRE(w[1] == -2);
+  REQUIRE(w[2] == -1);
+  REQUIRE(s.trace() == 15);
 }

@@ -1,0 +1,80 @@
+// The stencil of one point: the tensor product of a 1D shape function (kernels/shape.hpp) over
+// D axes. Built once per point from its position in grid units; every transfer, the heat
+// scatter and gather, the void closure and the energy's affine term read their weights,
+// gradients and node offsets from it, node by node in storage order (x fastest).
+//   weight    w_i   = prod_d w_d[a_d]                       (products in axis order)
+//   gradient  g_i,d = prod_e (e == d ? dw_e[a_e] : w_e[a_e])  (grid units: divide by h for 1/m)
+//   offset    x_i,d - x_p,d = base_d + a_d - xg_d          (grid units)
+// Each value is the same product, in the same order, as the hand-written 2D loops it replaces
+// (w = wx[a] wy[b], gx = dwx[a] wy[b], gy = wx[a] dwy[b]): results are bitwise those.
+#pragma once
+#include "shape.hpp"
+#include "tensor.hpp"
+
+namespace smpm::kern {
+
+constexpr int ipow(int b, int e) { return e == 0 ? 1 : b * ipow(b, e - 1); }
+
+template <class Shape, int D>
+struct Stencil {
+  static constexpr int N = Shape::N;           // nodes per axis
+  static constexpr int Nodes = ipow(N, D);     // nodes in all
+  double xg[D];                                // position in grid units
+  int base[D];                                 // first node per axis
+  double w[D][N], dw[D][N];                    // 1D weights and derivatives per axis
+
+  SMPM_INLINE Stencil(const Vec<D>& x, double lp) {
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) {
+      xg[d] = x[d];
+      base[d] = Shape::eval(x[d], lp, w[d], dw[d]);
+    }
+  }
+  // node offsets a[d] of the k-th node in storage order (x fastest)
+  SMPM_INLINE static Idx<D> digits(int k) {
+    Idx<D> a;
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) {
+      a[d] = k % N;
+      k /= N;
+    }
+    return a;
+  }
+  SMPM_INLINE double weight(const Idx<D>& a) const {
+    double v = w[0][a[0]];
+#pragma GCC unroll 3
+    for (int d = 1; d < D; ++d) v *= w[d][a[d]];
+    return v;
+  }
+  SMPM_INLINE double grad(const Idx<D>& a, int d) const {
+    double v = d == 0 ? dw[0][a[0]] : w[0][a[0]];
+#pragma GCC unroll 3
+    for (int e = 1; e < D; ++e) v *= e == d ? dw[e][a[e]] : w[e][a[e]];
+    return v;
+  }
+  SMPM_INLINE Vec<D> gradient(const Idx<D>& a) const {
+    Vec<D> g;
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) g[d] = grad(a, d);
+    return g;
+  }
+  SMPM_INLINE double offset(const Idx<D>& a, int d) const { return (base[d] + a[d]) - xg[d]; }
+  // D = sum_i w_i (x_i - x_p)^2 along axis d (the APIC inertia, grid units), summed node by node
+  SMPM_INLINE double inertia(int d) const {
+    double s = 0.0;
+#pragma GCC unroll 4
+    for (int a = 0; a < N; ++a) {
+      const double e = (base[d] + a) - xg[d];
+      s += w[d][a] * e * e;
+    }
+    return s;
+  }
+  // f(a, k) for every node, k its index in storage order
+  template <class F>
+  SMPM_INLINE void for_each(F&& f) const {
+#pragma GCC unroll 64
+    for (int k = 0; k < Nodes; ++k) f(digits(k), k);
+  }
+};
+
+}  // namespace smpm::kern
