@@ -586,7 +586,7 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     }
   };
   energy << std::setprecision(12);
-  const bool has_wall = scene.solver.walls.bottom != kern::Wall::None;
+  const bool has_wall = scene.solver.walls.lo[1] != kern::Wall::None;
   std::ofstream wall;
   if (has_wall) {
     open_csv(wall, out / "wall.csv", "time_ns,wall_stress_GPa\n", resume);

@@ -146,7 +146,7 @@ void add_free_surfaces(Scene& s, double d) {
       if (P.body[i] != static_cast<std::uint8_t>(b) && P.y[i] > top && P.y[i] < top + 1.5 * d && P.x[i] > x0 - d && P.x[i] < x1 + d)
         throw CaseError(key + "body '" + s.bodies[P.body[i]].name + "' lies on it; allowed on a body whose top "
                         "(max y) surface nothing touches");
-    if (s.solver.walls.top != kern::Wall::None && top + 1.5 * d > grid_top)
+    if (s.solver.walls.hi[1] != kern::Wall::None && top + 1.5 * d > grid_top)
       throw CaseError(key + "it touches the grid's top wall (walls.top); allowed on a body whose top (max y) surface "
                       "nothing touches");
     s.free_surfaces.push_back(std::move(f));
@@ -328,19 +328,19 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
     s.solver.heat_conduction = r.boolean("heat_conduction", false);
     s.solver.crack_closure = r.boolean("crack_closure", true);
     const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
-    s.solver.gravity_x = gx;
-    s.solver.gravity_y = gy;
+    s.solver.gravity[0] = gx;
+    s.solver.gravity[1] = gy;
     r.finish();
   }
   // [walls]
   {
     CaseReader r = top.table("walls");
     const std::vector<std::string> kinds{"none", "slip", "noslip"};
-    s.solver.walls.left = wall_kind(r.choice("left", kinds, "none"));
-    s.solver.walls.right = wall_kind(r.choice("right", kinds, "none"));
-    s.solver.walls.bottom = wall_kind(r.choice("bottom", kinds, "none"));
-    s.solver.walls.top = wall_kind(r.choice("top", kinds, "none"));
-    if (s.geom.periodic_x && (s.solver.walls.left != kern::Wall::None || s.solver.walls.right != kern::Wall::None))
+    s.solver.walls.lo[0] = wall_kind(r.choice("left", kinds, "none"));
+    s.solver.walls.hi[0] = wall_kind(r.choice("right", kinds, "none"));
+    s.solver.walls.lo[1] = wall_kind(r.choice("bottom", kinds, "none"));
+    s.solver.walls.hi[1] = wall_kind(r.choice("top", kinds, "none"));
+    if (s.geom.periodic_x && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
       throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
     r.finish();
   }

@@ -14,6 +14,7 @@
 #include "engine/transfer_step.hpp"
 #include "kernels/heat.hpp"
 #include "kernels/sort.hpp"
+#include "kernels/stencil.hpp"
 #include "kernels/transfer.hpp"
 #include "kernels/void_closure.hpp"
 
@@ -81,8 +82,8 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   order_.resize(n);
   cell_start_.resize(geom.num_keys() + 1);
   hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
-  row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.sy()), 0.0);
-  row_loss_.assign(static_cast<std::size_t>(geom.sy()), 0.0);
+  row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.num_lines()), 0.0);
+  row_loss_.assign(static_cast<std::size_t>(geom.num_lines()), 0.0);
   if (cfg_.void_faces == VoidFaces::Separate && cfg_.void_face_merge) node_state_.assign(geom.num_nodes(), 0);
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
@@ -105,7 +106,7 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
     }
     heat_cmin_ = cmin;
     heat_dt_ = 0.9 * cmin / (4.0 * conductivity_);
-    for (auto* a : {&heat_cap_, &heat_capT_, &heat_T_, &heat_dT_}) a->assign(geom.num_nodes(), 0.0);
+    grid_.enable_heat();
     // relaxation of sub-cell temperature structure (kernels/heat.hpp): time 10 h^2 / alpha
     double alpha = 0.0;
     for (const auto& m : materials_) alpha = std::max(alpha, m.conductivity / (m.rho0 * m.cv));
@@ -141,11 +142,17 @@ void Simulation::step(double dt_max) {
   dt_ = std::min(stable_dt(), dt_max);
   bin_particles();      // cell keys, counting sort by tile and cell
   scatter_to_grid();    // P2G: mass, momentum, internal force (colored, atomic-free)
-  update_grid();        // momentum update with gravity, walls
-  gather_from_grid();   // G2P: velocity, position, velocity gradient (MUSL: with remap); the
-                        // last pass updates volume, stress, pressure, energy block by block
-                        // behind it; signal speed for the next dt
-  merge_closed_faces();  // two void-face fields: a point whose nodes are all full, one welded, joins field 0
+  fold_halo();          // periodic axes: the ghosts' sums onto the nodes they stand for
+  update_grid();        // momentum update with gravity and walls, per velocity field
+  apply_contact();      // several velocity fields: Coulomb contact, or the weld of void faces
+  fill_halo();          // periodic axes: the ghosts take the updated values
+  if (cfg_.scheme == Scheme::MUSL) {
+    gather_velocity();  // G2P: the particles' new velocities
+    remap_momentum();   // their momentum back to the grid, the grid velocity from it
+  }
+  gather_and_update_stress();  // G2P: (USL: velocity,) position, L; behind each block of points
+                               // volume, stress, pressure, energy; the next step's signal speed
+  merge_closed_faces();  // void-face fields: a point whose nodes are all full, one welded, joins field 0
   close_cracks();        // a fractured point among compressed cell-mates: its group shares one density
   if (cfg_.heat_conduction) conduct_heat();  // grid conduction, heat back to the particles
   time_ += dt_;
@@ -169,8 +176,11 @@ void Simulation::merge_closed_faces() {
   Timed t(times_.contact);
   const kern::MergeParams q{cfg_.void_face_volume_fraction, mass_eps_, cfg_.ugimp_lp};
   kern::with_shape(cfg_.shape, [&](auto shape) {
-    kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), P_.x.data(), P_.y.data(),
-                                              P_.field.data(), P_.size(), q, node_state_.data());
+    const auto pv = P_.view();
+    const double* pos[kern::kDim];
+    for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.pos(d);
+    kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), pos, P_.field.data(), P_.size(), q,
+                                              node_state_.data());
   });
 }
 
@@ -199,20 +209,30 @@ void Simulation::close_cracks() {
   }
 }
 
-void Simulation::bin_particles() {
-  Timed t(times_.sort);
+void Simulation::sort_by_cell() {
   const auto& g = grid_.geom;
   const std::size_t n = P_.size();
-  const auto bad = kern::compute_keys(g, P_.x.data(), P_.y.data(), n, key_.data());
+  const auto pv = P_.view();
+  const double* pos[kern::kDim];
+  for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.pos(d);
+  const auto bad = kern::compute_keys(g, pos, n, key_.data());
   if (bad >= 0) {
+    std::string span;
+    for (int d = 0; d < kern::kDim; ++d)
+      span += std::string(d ? ", " : "") + kern::kAxisNames[d] + " in [" + std::to_string(g.origin(d)) + ", " +
+              std::to_string(g.origin(d) + g.cells(d) * g.h) + "]";
     throw StepError("particle left the grid: " + describe_particle(static_cast<std::size_t>(bad)) +
-                    "; the grid spans x in [" + std::to_string(g.x0) + ", " + std::to_string(g.x0 + g.length_x()) +
-                    "] m, y in [" + std::to_string(g.y0) + ", " + std::to_string(g.y0 + g.length_y()) +
-                    "] m: enlarge the grid or add a wall");
+                    "; the grid spans " + span + " m: enlarge the grid or add a wall");
   }
   kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
-  box_ = kern::occupied_nodes(g, cell_start_.data());  // the grid passes of this step stay inside
+}
+
+void Simulation::bin_particles() {
+  Timed t(times_.sort);
+  sort_by_cell();
+  box_ = kern::occupied_nodes(grid_.geom, cell_start_.data());  // the grid passes of this step stay inside
   if (cfg_.permute_every > 0 && steps_ % cfg_.permute_every == 0) {
+    const std::size_t n = P_.size();
     P_.permute(order_.data(), scratch_d_, scratch_u_, scratch_b_);
     kern::gather_permute(key_.data(), order_.data(), n, scratch_u_.data());
     key_.swap(scratch_u_);
@@ -237,62 +257,64 @@ void Simulation::scatter_to_grid() {
   Timed t(times_.p2g);
   const auto a = transfer_args();
   kern::with_shape(cfg_.shape, [&](auto shape) { transfer::scatter<decltype(shape)>(a); });
-  for (int f = 0; f < a.G.fields; ++f) {
-    const auto F = a.G.field(f);
-    double* arrays[] = {F.m, F.px, F.py, F.fx, F.fy, F.vol, F.gmx, F.gmy};
-    kern::fold_periodic(a.g, box_, arrays, cfg_.contact ? 8 : cfg_.fields() > 1 ? 6 : 5);
-  }
 }
 
-void Simulation::update_grid() {
-  const auto& g = grid_.geom;
-  auto G = grid_.view();
+void Simulation::fold_halo() {
+  Timed t(times_.p2g);
+  using A = NodeArray;
+  grid_.fold(box_, {A::Mass, A::Momentum, A::Force, A::Volume, A::MassGradient});
+}
+
+kern::GridUpdateParams Simulation::grid_params() const {
   kern::GridUpdateParams q;
   q.dt = dt_;
-  q.gravity_x = cfg_.gravity_x;
-  q.gravity_y = cfg_.gravity_y;
+  for (int d = 0; d < kern::kDim; ++d) q.gravity[d] = cfg_.gravity[d];
   q.walls = cfg_.walls;
   q.flip = cfg_.transfer == Transfer::FLIP;
   q.mass_eps = mass_eps_;
   // APIC's heating gather reads p / m (kern::g2p_particle); FLIP's takes v - dv
   q.scatter_velocity = transfer_heat() && cfg_.transfer == Transfer::APIC;
-  {
-    Timed t(times_.grid);
-    WallForces w;
-    for (int f = 0; f < G.fields; ++f) {
-      kern::grid_update(g, box_, G.field(f), q, row_force_.data());
-      for (int r = 0; r < g.sy(); ++r) {
-        const double* rf = &row_force_[kern::kRowSlots * r];
-        w.left += rf[0];
-        w.right += rf[1];
-        w.bottom += rf[2];
-        w.top += rf[3];
-        removed_.wall += rf[4];
-      }
-    }
-    wall_ = w;
-  }
-  if (cfg_.fields() > 1) {
-    Timed t(times_.contact);
-    const bool weld = cfg_.void_faces == VoidFaces::Separate;
-    kern::ContactParams c{cfg_.friction, weld, weld ? cfg_.void_face_volume_fraction : cfg_.contact_volume_fraction,
-                          midstep_};
-    kern::grid_contact(g, box_, G, q, c, row_loss_.data());
-    for (double r : row_loss_) removed_.contact += r;
-  }
+  return q;
+}
+
+void Simulation::update_grid() {
   Timed t(times_.grid);
+  const auto& g = grid_.geom;
+  const auto G = grid_.view();
+  const auto q = grid_params();
+  WallForces w;
   for (int f = 0; f < G.fields; ++f) {
-    const auto F = G.field(f);
-    double* arrays[] = {F.vx, F.vy, F.dvx, F.dvy};
-    kern::fill_periodic_ghosts(g, box_, arrays, q.flip ? 4 : 2);
-    if (q.scatter_velocity) {  // the gather reads the scatter's velocity (and contact heat)
-      double* scatter[] = {F.px, F.py, F.heat};
-      kern::fill_periodic_ghosts(g, box_, scatter, G.fields > 1 ? 3 : 2);
-    } else if (transfer_heat() && G.fields > 1) {  // FLIP's heating gather: contact heat
-      double* heat[] = {F.heat};
-      kern::fill_periodic_ghosts(g, box_, heat, 1);
+    kern::grid_update(g, box_, G.field(f), q, row_force_.data());
+    for (int r = 0; r < g.num_lines(); ++r) {
+      const double* rf = &row_force_[kern::kRowSlots * r];
+      w.left += rf[0];
+      w.right += rf[1];
+      w.bottom += rf[2];
+      w.top += rf[3];
+      removed_.wall += rf[2 * kern::kDim];
     }
   }
+  wall_ = w;
+}
+
+void Simulation::apply_contact() {
+  if (cfg_.fields() == 1) return;
+  Timed t(times_.contact);
+  const bool weld = cfg_.void_faces == VoidFaces::Separate;
+  const kern::ContactParams c{cfg_.friction, weld,
+                              weld ? cfg_.void_face_volume_fraction : cfg_.contact_volume_fraction, midstep_};
+  kern::grid_contact(grid_.geom, box_, grid_.view(), grid_params(), c, row_loss_.data());
+  for (double r : row_loss_) removed_.contact += r;
+}
+
+void Simulation::fill_halo() {
+  Timed t(times_.grid);
+  using A = NodeArray;
+  grid_.fill(box_, {A::Velocity, A::VelocityChange});
+  if (grid_params().scatter_velocity)  // the gather reads the scatter's velocity (and contact heat)
+    grid_.fill(box_, {A::Momentum, A::ContactHeat});
+  else if (transfer_heat())  // FLIP's heating gather: contact heat (several fields)
+    grid_.fill(box_, {A::ContactHeat});
 }
 
 // The constitutive update of points [first, last), L their velocity gradient (element 0 = point
@@ -326,19 +348,42 @@ auto Simulation::stress_pass(double& thread0_seconds) {
   };
 }
 
-void Simulation::gather_from_grid() {
+kern::G2PParams Simulation::gather_params() const {
+  const auto& g = grid_.geom;
+  kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha, midstep_ ? 0.5 : 0.0};
+  // walls: the largest double below the far edge keeps a clamped point inside the grid
+  for (int d = 0; d < kern::kDim; ++d) {
+    const double o = g.origin(d), top = o + g.cells(d) * g.h;
+    if (cfg_.walls.lo[d] != kern::Wall::None) q.lo[d] = o;
+    if (cfg_.walls.hi[d] != kern::Wall::None) q.hi[d] = std::nextafter(top, o);
+  }
+  return q;
+}
+
+void Simulation::gather_velocity() {
+  Timed t(times_.g2p);
+  const auto a = transfer_args();
+  const auto q = gather_params();
+  kern::with_shape(cfg_.shape, [&](auto shape) { transfer::gather_velocity<decltype(shape)>(a, q); });
+}
+
+void Simulation::remap_momentum() {
+  Timed t(times_.g2p);
+  const auto a = transfer_args();
+  kern::with_shape(cfg_.shape, [&](auto shape) { transfer::scatter_momentum<decltype(shape)>(a, cfg_.ugimp_lp); });
+  grid_.fold(box_, {NodeArray::Momentum});
+  kern::GridUpdateParams q;
+  q.walls = cfg_.walls;
+  kern::grid_velocity_from_momentum(grid_.geom, box_, a.G, q);
+  grid_.fill(box_, {NodeArray::Velocity});
+}
+
+void Simulation::gather_and_update_stress() {
   const double t_start = omp_get_wtime();
   double stress_seconds = 0.0;
   const auto stress = stress_pass(stress_seconds);
   const auto a = transfer_args();
-  const auto& g = a.g;
-  kern::G2PParams q{dt_, cfg_.ugimp_lp, cfg_.flip_alpha, midstep_ ? 0.5 : 0.0};
-  // walls: the largest double below the far edge keeps a clamped point inside the grid
-  using kern::Wall;
-  if (cfg_.walls.left != Wall::None) q.xmin = g.x0;
-  if (cfg_.walls.right != Wall::None) q.xmax = std::nextafter(g.x0 + g.length_x(), g.x0);
-  if (cfg_.walls.bottom != Wall::None) q.ymin = g.y0;
-  if (cfg_.walls.top != Wall::None) q.ymax = std::nextafter(g.y0 + g.length_y(), g.y0);
+  const auto q = gather_params();
   // L of each block in a per-thread buffer (with the energy's mid-step rate), unless asked to
   // store L on the particles
   const int threads = omp_get_max_threads();
@@ -346,7 +391,7 @@ void Simulation::gather_from_grid() {
     gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
   const auto update = transfer::BlockUpdate::of(stress);
   const kern::ConstitutiveResult r = kern::with_shape(cfg_.shape, [&](auto shape) {
-    return transfer::gather<decltype(shape)>(a, q, gather_scratch_.data(), store_gradient_, update);
+    return transfer::gather_and_update_stress<decltype(shape)>(a, q, gather_scratch_.data(), store_gradient_, update);
   });
   times_.constitutive += stress_seconds;
   times_.g2p += omp_get_wtime() - t_start - stress_seconds;
@@ -364,21 +409,24 @@ void Simulation::conduct_heat() {
     const int k = body_material_[P_.body[p]];
     T_[p] = particle_temperature(P_, p, thermo_[k], materials_[k]);
   }
-  const kern::HeatGrid H{heat_cap_.data(), heat_capT_.data(), heat_T_.data(), heat_dT_.data()};
-  const kern::HeatParticles hp{P_.x.data(), P_.y.data(), P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(),
-                               P_.e.data()};
-  std::fill(heat_cap_.begin(), heat_cap_.end(), 0.0);
-  std::fill(heat_capT_.begin(), heat_capT_.end(), 0.0);
-  // the particles moved in this step: bin them again for the scatter
-  const auto bad = kern::compute_keys(g, P_.x.data(), P_.y.data(), n, key_.data());
-  if (bad >= 0) throw StepError("particle left the grid: " + describe_particle(static_cast<std::size_t>(bad)));
-  kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
+  const kern::HeatGrid H{grid_.cap.data(), grid_.capT.data(), grid_.T.data(), grid_.dT.data()};
+  const auto pv = P_.view();
+  kern::HeatParticles hp{{}, P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(), P_.e.data()};
+  for (int d = 0; d < kern::kDim; ++d) hp.x[d] = pv.pos(d);
+  std::fill(grid_.cap.begin(), grid_.cap.end(), 0.0);
+  std::fill(grid_.capT.begin(), grid_.capT.end(), 0.0);
+  // the particles moved in this step: sort them again for the scatter
+  sort_by_cell();
+  using A = NodeArray;
+  const kern::NodeBox all = g.all_nodes();
   kern::with_shape(cfg_.shape, [&](auto shape) {
     using S = decltype(shape);
     kern::heat_scatter<S>(g, H, hp, order_.data(), cell_start_.data(), cfg_.ugimp_lp);
-    double* arrays[] = {H.cap, H.capT};
-    kern::fold_periodic(g, g.all_nodes(), arrays, 2);
+    grid_.fold(all, {A::HeatCapacity, A::HeatContent});
+    kern::heat_temperatures(g, H);
+    grid_.fill(all, {A::Temperature, A::HeatCapacity});  // the fluxes read the ghosts' neighbours
     kern::heat_conduct(g, H, conductivity_, heat_cmin_, dt_);
+    grid_.fill(all, {A::TemperatureChange});
     kern::heat_gather<S>(g, H, hp, n, cfg_.ugimp_lp, std::min(1.0, heat_relax_rate_ * dt_));
   });
 }
@@ -403,22 +451,22 @@ Simulation::Energy Simulation::energy() const {
   Energy e;
   const bool has_e = !P_.e.empty(), apic = !P_.Cxx.empty();
   const auto& g = grid_.geom;
+  const auto pv = const_cast<Particles&>(P_).view();
   for (std::size_t p = 0; p < P_.size(); ++p) {
-    e.kinetic += 0.5 * P_.m[p] * (P_.vx[p] * P_.vx[p] + P_.vy[p] * P_.vy[p]);
+    double v[kern::kDim];
+    for (int d = 0; d < kern::kDim; ++d) v[d] = pv.vel(d)[p];
+    e.kinetic += 0.5 * P_.m[p] * kern::norm2(v);
     if (apic) {  // the affine field's share: 1/2 m sum_ab C_ab^2 D_b
-      double Dx = 0, Dy = 0;
+      double Dn[kern::kDim], C[kern::kDim][kern::kDim];
       kern::with_shape(cfg_.shape, [&](auto shape) {
-        using S = decltype(shape);
-        double w[S::N], dw[S::N];
-        const double xg = (P_.x[p] - g.x0) / g.h, yg = (P_.y[p] - g.y0) / g.h;
-        int b = S::eval(xg, cfg_.ugimp_lp, w, dw);
-        for (int a = 0; a < S::N; ++a) Dx += w[a] * (b + a - xg) * (b + a - xg);
-        b = S::eval(yg, cfg_.ugimp_lp, w, dw);
-        for (int a = 0; a < S::N; ++a) Dy += w[a] * (b + a - yg) * (b + a - yg);
+        kern::Vec<kern::kDim> xg;
+        for (int d = 0; d < kern::kDim; ++d) xg[d] = (pv.pos(d)[p] - g.origin(d)) / g.h;
+        const kern::Stencil<decltype(shape), kern::kDim> st(xg, cfg_.ugimp_lp);
+        for (int d = 0; d < kern::kDim; ++d) Dn[d] = st.inertia(d);
       });
-      const double h2 = g.h * g.h;
-      e.kinetic += 0.5 * P_.m[p] * h2 *
-                   ((P_.Cxx[p] * P_.Cxx[p] + P_.Cyx[p] * P_.Cyx[p]) * Dx + (P_.Cxy[p] * P_.Cxy[p] + P_.Cyy[p] * P_.Cyy[p]) * Dy);
+      for (int r = 0; r < kern::kDim; ++r)
+        for (int c = 0; c < kern::kDim; ++c) C[r][c] = pv.affine(r, c)[p];
+      e.kinetic += 0.5 * P_.m[p] * (g.h * g.h) * kern::affine_energy(C, Dn);
     }
     if (has_e) {
       e.internal += P_.m[p] * P_.e[p];
@@ -466,12 +514,11 @@ void Simulation::restore(const CheckpointReader& r) {
   for (std::size_t k = 0; k < slots.size(); ++k) *slots[k] = v[k];
 }
 
-std::array<double, 2> Simulation::momentum() const {
-  std::array<double, 2> q{0.0, 0.0};
-  for (std::size_t p = 0; p < P_.size(); ++p) {
-    q[0] += P_.m[p] * P_.vx[p];
-    q[1] += P_.m[p] * P_.vy[p];
-  }
+std::array<double, kern::kDim> Simulation::momentum() const {
+  std::array<double, kern::kDim> q{};
+  const auto pv = const_cast<Particles&>(P_).view();
+  for (std::size_t p = 0; p < P_.size(); ++p)
+    for (int d = 0; d < kern::kDim; ++d) q[d] += P_.m[p] * pv.vel(d)[p];
   return q;
 }
 

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "engine/simulation.hpp"
+#include "engine/solver_config.hpp"
 #include "kernels/constitutive.hpp"
 #include "kernels/transfer.hpp"
 
@@ -44,14 +44,21 @@ struct BlockUpdate {
 };
 
 // P2G: mass, momentum, internal force (and the contact fields), colored and atomic-free. The
-// grid inside the box is cleared first; the periodic fold is the caller's.
+// grid inside the box is cleared first; the periodic fold is the caller's (Grid::fold).
 template <class Shape>
 void scatter(const StepArgs& a);
-
-// G2P: USL's gather, or MUSL's velocity pass, momentum remap and position pass; the pass that
-// forms L calls `update` behind each block. scratch, store_L: see kern::g2p_blocks.
+// MUSL's first pass: the particles' velocities from the updated grid velocity (APIC: the
+// heating gather, as USL's).
 template <class Shape>
-kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* scratch, bool store_L,
-                                 BlockUpdate update);
+void gather_velocity(const StepArgs& a, const kern::G2PParams& q);
+// MUSL's remap: the grid's momentum cleared and scattered again from the particles' new
+// velocities (the fold and the velocity from it are the caller's).
+template <class Shape>
+void scatter_momentum(const StepArgs& a, double lp);
+// The pass that forms L (USL's gather; MUSL's position pass over the remapped velocity), with
+// `update` (the constitutive update) behind each block. scratch, store_L: see kern::g2p_blocks.
+template <class Shape>
+kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern::G2PParams& q, double* scratch,
+                                                  bool store_L, BlockUpdate update);
 
 }  // namespace smpm::transfer

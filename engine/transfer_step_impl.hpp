@@ -26,51 +26,50 @@ void scatter(const StepArgs& a) {
 }
 
 template <class S>
-kern::ConstitutiveResult gather(const StepArgs& a, const kern::G2PParams& q, double* scratch, bool store_L,
-                                 BlockUpdate update) {
+void gather_velocity(const StepArgs& a, const kern::G2PParams& q) {
+  using kern::G2PWhat;
+  if (a.cfg.transfer == Transfer::FLIP) kern::g2p<S, true, G2PWhat::Velocity>(a.g, a.G, a.P, a.n, q);
+  else kern::g2p<S, false, G2PWhat::Velocity, true>(a.g, a.G, a.P, a.n, q);  // heating, as USL's
+}
+
+template <class S>
+void scatter_momentum(const StepArgs& a, double lp) {
+  using kern::P2GWhat;
+  kern::clear_grid(a.g, a.box, a.G, false);
+  if (a.cfg.transfer == Transfer::APIC)
+    kern::p2g_colored<S, true, P2GWhat::Momentum>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+  else
+    kern::p2g_colored<S, false, P2GWhat::Momentum>(a.g, a.G, a.P, a.order, a.cell_start, lp);
+}
+
+template <class S>
+kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern::G2PParams& q, double* scratch,
+                                                  bool store_L, BlockUpdate update) {
   using kern::G2PWhat;
   using Result = kern::ConstitutiveResult;
-  const auto& g = a.g;
-  const auto& G = a.G;
-  const auto& pv = a.P;
-  const std::size_t n = a.n;
   const bool flip = a.cfg.transfer == Transfer::FLIP;
-  if (a.cfg.scheme == Scheme::USL) {
-    // always the heating gather (a scene without an energy field heats a scratch array:
-    // Simulation::transfer_args); the one without heating would be a fourth of these files'
-    // compile time for scenes that are not the study's
-    auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
-      constexpr int C = decltype(contact)::value;
-      if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, scratch, store_L, update);
-      return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(g, G, pv, n, q, scratch, store_L, update);
-    };
-    if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
-    if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
-    return usl(std::integral_constant<int, 0>{});
-  }
-  // MUSL: new particle velocities, remap their momentum to the grid, then move the particles
-  // and take the velocity gradient from the remapped grid velocity.
-  if (flip) kern::g2p<S, true, G2PWhat::Velocity>(g, G, pv, n, q);
-  else kern::g2p<S, false, G2PWhat::Velocity, true>(g, G, pv, n, q);  // heating, as USL's
-  kern::clear_grid(g, a.box, G, false);
-  if (a.cfg.transfer == Transfer::APIC)
-    kern::p2g_colored<S, true, kern::P2GWhat::Momentum>(g, G, pv, a.order, a.cell_start, q.lp);
-  else
-    kern::p2g_colored<S, false, kern::P2GWhat::Momentum>(g, G, pv, a.order, a.cell_start, q.lp);
-  double* mom[] = {G.px, G.py};
-  kern::fold_periodic(g, a.box, mom, 2);
-  kern::GridUpdateParams gq;
-  gq.walls = a.cfg.walls;
-  kern::grid_velocity_from_momentum(g, a.box, G, gq);
-  double* vel[] = {G.vx, G.vy};
-  kern::fill_periodic_ghosts(g, a.box, vel, 2);
-  return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(g, G, pv, n, q, scratch, store_L,
-                                                                                    update);
+  if (a.cfg.scheme == Scheme::MUSL)
+    return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(a.g, a.G, a.P, a.n, q, scratch,
+                                                                                      store_L, update);
+  // USL: always the heating gather (a scene without an energy field heats a scratch array:
+  // Simulation::transfer_args); the one without heating would be a fourth of these files'
+  // compile time for scenes that are not the study's
+  auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
+    constexpr int C = decltype(contact)::value;
+    if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, store_L, update);
+    return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, store_L, update);
+  };
+  if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
+  if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
+  return usl(std::integral_constant<int, 0>{});
 }
 
 }  // namespace smpm::transfer
 
 // One shape's instantiation, inside namespace smpm::transfer: SMPM_TRANSFER_INSTANTIATE(kern::Linear).
-#define SMPM_TRANSFER_INSTANTIATE(SHAPE)        \
-  template void scatter<SHAPE>(const StepArgs&); \
-  template kern::ConstitutiveResult gather<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, bool, BlockUpdate);
+#define SMPM_TRANSFER_INSTANTIATE(SHAPE)                                     \
+  template void scatter<SHAPE>(const StepArgs&);                              \
+  template void gather_velocity<SHAPE>(const StepArgs&, const kern::G2PParams&); \
+  template void scatter_momentum<SHAPE>(const StepArgs&, double);             \
+  template kern::ConstitutiveResult gather_and_update_stress<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, \
+                                                                    bool, BlockUpdate);

@@ -7,118 +7,115 @@ namespace smpm::kern {
 
 namespace {
 
-inline void apply_wall(Wall w, double& vn, double& vt) {
-  if (w == Wall::Slip) vn = 0.0;
-  else if (w == Wall::NoSlip) vn = vt = 0.0;
-}
-
-// Applies all walls to the velocity (vx, vy) of node (i, j) in place and adds the change each
-// wall made to dv: dv[0] left (x), dv[1] right (x), dv[2] bottom (y), dv[3] top (y).
-inline void constrain(const GridGeom& g, const Walls& W, int i, int j, double& vx, double& vy,
-                      double* dv) {
-  if (!g.periodic_x) {
-    if (W.left != Wall::None && i <= 0) {
-      const double b = vx;
-      apply_wall(W.left, vx, vy);
-      dv[0] += vx - b;
+// Applies every wall to velocity v of node i in place and adds the change each wall made to its
+// slot of dv: dv[2 d] the low wall of axis d, dv[2 d + 1] the high one (left, right, bottom,
+// top). Slip zeroes the normal component, NoSlip all of them. Axes in order, low wall first.
+inline void constrain(const GridGeom& g, const Walls& W, const Idx<kDim>& i, double* v, double* dv) {
+  for (int d = 0; d < kDim; ++d) {
+    if (g.periodic(d)) continue;
+    for (int s = 0; s < 2; ++s) {
+      const Wall w = s ? W.hi[d] : W.lo[d];
+      if (w == Wall::None || (s ? i[d] < g.cells(d) : i[d] > 0)) continue;
+      const double before = v[d];
+      if (w == Wall::Slip) {
+        v[d] = 0.0;
+      } else {
+        for (int e = 0; e < kDim; ++e) v[e] = 0.0;
+      }
+      dv[2 * d + s] += v[d] - before;
     }
-    if (W.right != Wall::None && i >= g.nx) {
-      const double b = vx;
-      apply_wall(W.right, vx, vy);
-      dv[1] += vx - b;
-    }
-  }
-  if (W.bottom != Wall::None && j <= 0) {
-    const double b = vy;
-    apply_wall(W.bottom, vy, vx);
-    dv[2] += vy - b;
-  }
-  if (W.top != Wall::None && j >= g.ny) {
-    const double b = vy;
-    apply_wall(W.top, vy, vx);
-    dv[3] += vy - b;
   }
 }
 
 }  // namespace
 
-void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
+void grid_update(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
                  double* row_force) {
-  int i0, i1;
-  real_columns(g, b, i0, i1);
+  const NodeBox b = real_nodes(g, box);
   const double inv_dt = q.dt > 0.0 ? 1.0 / q.dt : 0.0;
-  if (row_force) std::fill(row_force, row_force + kRowSlots * static_cast<std::size_t>(g.sy()), 0.0);
+  if (row_force) std::fill(row_force, row_force + kRowSlots * static_cast<std::size_t>(g.num_lines()), 0.0);
+  const int lines = b.lines();
 #pragma omp parallel for schedule(static)
-  for (int j = b.j0; j <= b.j1; ++j) {
-    const int r = j + g.pad;
-    double rf[kRowSlots] = {0, 0, 0, 0, 0};
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t n = g.node(i, j);
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    const int line = g.line(i);
+    double rf[kRowSlots] = {};
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
+      const std::size_t n = g.node(i);
       const double m = G.m[n];
       if (m <= 0.0) {
-        G.vx[n] = G.vy[n] = 0.0;
-        if (q.flip) G.dvx[n] = G.dvy[n] = 0.0;
-        if (q.scatter_velocity) G.px[n] = G.py[n] = 0.0;
+        for (int d = 0; d < kDim; ++d) {
+          G.v[d][n] = 0.0;
+          if (q.flip) G.dv[d][n] = 0.0;
+          if (q.scatter_velocity) G.p[d][n] = 0.0;
+        }
         continue;
       }
       const double inv_m = 1.0 / m;
-      double ux = G.px[n] * inv_m, uy = G.py[n] * inv_m;  // old velocity
       const double acc = m > q.mass_eps ? q.dt : 0.0;
-      double vx = ux + acc * (G.fx[n] * inv_m + q.gravity_x);
-      double vy = uy + acc * (G.fy[n] * inv_m + q.gravity_y);
-      double scratch[4] = {0, 0, 0, 0};
-      const double u2 = ux * ux + uy * uy;
-      constrain(g, q.walls, i, j, ux, uy, scratch);
-      rf[4] += 0.5 * m * (u2 - ux * ux - uy * uy);
-      if (q.scatter_velocity) {  // after the walls: see GridUpdateParams
-        G.px[n] = ux;
-        G.py[n] = uy;
-      }
-      double dv[4] = {0, 0, 0, 0};
-      constrain(g, q.walls, i, j, vx, vy, dv);
-      for (int k = 0; k < 4; ++k) rf[k] += m * dv[k] * inv_dt;
-      G.vx[n] = vx;
-      G.vy[n] = vy;
-      if (q.flip) {
-        G.dvx[n] = vx - ux;
-        G.dvy[n] = vy - uy;
+      double u[kDim], v[kDim];  // old and new velocity
+      for (int d = 0; d < kDim; ++d) u[d] = G.p[d][n] * inv_m;
+      for (int d = 0; d < kDim; ++d) v[d] = u[d] + acc * (G.f[d][n] * inv_m + q.gravity[d]);
+      double scratch[2 * kDim] = {};
+      const double u2 = norm2(u);
+      constrain(g, q.walls, i, u, scratch);
+      double lost = u2;
+      for (int d = 0; d < kDim; ++d) lost -= u[d] * u[d];
+      rf[2 * kDim] += 0.5 * m * lost;
+      if (q.scatter_velocity)  // after the walls: see GridUpdateParams
+        for (int d = 0; d < kDim; ++d) G.p[d][n] = u[d];
+      double dv[2 * kDim] = {};
+      constrain(g, q.walls, i, v, dv);
+      for (int k = 0; k < 2 * kDim; ++k) rf[k] += m * dv[k] * inv_dt;
+      for (int d = 0; d < kDim; ++d) {
+        G.v[d][n] = v[d];
+        if (q.flip) G.dv[d][n] = v[d] - u[d];
       }
     }
     if (row_force)
-      for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * r + k] = rf[k];
+      for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * line + k] = rf[k];
   }
 }
 
-void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q) {
-  int i0, i1;
-  real_columns(g, b, i0, i1);
+void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q) {
+  const NodeBox b = real_nodes(g, box);
+  const int lines = b.lines();
 #pragma omp parallel for schedule(static)
-  for (int j = b.j0; j <= b.j1; ++j) {
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t n = g.node(i, j);
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
+      const std::size_t n = g.node(i);
       const double m = G.m[n];
-      if (m <= 0.0) {
-        G.vx[n] = G.vy[n] = 0.0;
-        continue;
+      double v[kDim] = {};
+      if (m > 0.0) {
+        for (int d = 0; d < kDim; ++d) v[d] = G.p[d][n] / m;
+        double dv[2 * kDim] = {};
+        constrain(g, q.walls, i, v, dv);
       }
-      double vx = G.px[n] / m, vy = G.py[n] / m;
-      double dv[4] = {0, 0, 0, 0};
-      constrain(g, q.walls, i, j, vx, vy, dv);
-      G.vx[n] = vx;
-      G.vy[n] = vy;
+      for (int d = 0; d < kDim; ++d) G.v[d][n] = v[d];
     }
   }
 }
 
 void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all) {
   if (b.empty()) return;
-  double* const arrays[] = {G.px, G.py, G.m, G.fx, G.fy, G.vol, G.gmx, G.gmy};
-  const int count = !all ? 2 : G.gmx ? 8 : G.vol ? 6 : 5;  // two-body contact, a weld, one field
-  const std::size_t len = static_cast<std::size_t>(b.i1 - b.i0 + 1);
+  // what a P2G writes: momentum; with `all` mass, force and the contact arrays in use
+  double* arrays[3 * kDim + 2];
+  int count = 0;
+  for (int d = 0; d < kDim; ++d) arrays[count++] = G.p[d];
+  if (all) {
+    arrays[count++] = G.m;
+    for (int d = 0; d < kDim; ++d) arrays[count++] = G.f[d];
+    if (G.vol) arrays[count++] = G.vol;
+    for (int d = 0; d < kDim; ++d)
+      if (G.gm[d]) arrays[count++] = G.gm[d];
+  }
+  const std::size_t len = static_cast<std::size_t>(b.hi[0] - b.lo[0] + 1);
+  const int lines = b.lines();
 #pragma omp parallel for schedule(static) collapse(2)
   for (int f = 0; f < G.fields; ++f)
-    for (int j = b.j0; j <= b.j1; ++j) {
-      const std::size_t n0 = g.node(b.i0, j) + f * G.fstride;
+    for (int r = 0; r < lines; ++r) {
+      const std::size_t n0 = g.node(b.line_start(r)) + f * G.fstride;
       for (int k = 0; k < count; ++k) std::fill(arrays[k] + n0, arrays[k] + n0 + len, 0.0);
     }
 }
@@ -133,16 +130,17 @@ namespace {
 // no contact heat (heat = 0).
 void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q, double vmin,
                  double* row_loss) {
-  int i0, i1;
-  real_columns(g, box, i0, i1);
+  const NodeBox b = real_nodes(g, box);
   const std::size_t fs = G.fstride;
-  const int K = G.fields;
+  const int K = G.fields, lines = b.lines();
 #pragma omp parallel for schedule(static)
-  for (int j = box.j0; j <= box.j1; ++j) {
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    const int line = g.line(i);
     double row = 0.0;
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t a = g.node(i, j);
-      double M = 0.0, V = 0.0, mvx = 0.0, mvy = 0.0, mpx = 0.0, mpy = 0.0;
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
+      const std::size_t a = g.node(i);
+      double M = 0.0, V = 0.0, mv[kDim] = {}, mp[kDim] = {};
       int present = 0;
       for (int f = 0; f < K; ++f) {
         const std::size_t k = a + f * fs;
@@ -152,26 +150,106 @@ void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const
         if (m <= q.mass_eps) continue;
         ++present;
         M += m;
-        mvx += m * G.vx[k];
-        mvy += m * G.vy[k];
-        mpx += m * G.px[k];
-        mpy += m * G.py[k];
+        for (int d = 0; d < kDim; ++d) {
+          mv[d] += m * G.v[d][k];
+          mp[d] += m * G.p[d][k];
+        }
       }
       if (present < 2 || V < vmin) continue;
-      const double cx = mvx / M, cy = mvy / M, px = mpx / M, py = mpy / M;
+      double c[kDim], u[kDim];  // centre-of-mass velocity after the forces and before them
+      for (int d = 0; d < kDim; ++d) {
+        c[d] = mv[d] / M;
+        u[d] = mp[d] / M;
+      }
       for (int f = 0; f < K; ++f) {
         const std::size_t k = a + f * fs;
         if (G.m[k] <= q.mass_eps) continue;
-        const double rx = G.px[k] - px, ry = G.py[k] - py;
-        row += 0.5 * G.m[k] * (rx * rx + ry * ry);
-        G.px[k] = px;
-        G.py[k] = py;
-        G.vx[k] = cx;  // (scatter_velocity means APIC: no FLIP increments)
-        G.vy[k] = cy;
+        double e[kDim];
+        for (int d = 0; d < kDim; ++d) e[d] = G.p[d][k] - u[d];
+        row += 0.5 * G.m[k] * norm2(e);
+        for (int d = 0; d < kDim; ++d) {
+          G.p[d][k] = u[d];
+          G.v[d][k] = c[d];  // (scatter_velocity means APIC: no FLIP increments)
+        }
       }
     }
-    if (row_loss) row_loss[j + g.pad] = row;
+    if (row_loss) row_loss[line] = row;
   }
+}
+
+// Coulomb contact (or FLIP's weld) of field 0's velocity v0 against the centre of mass c at a
+// node (see grid_contact): the corrected velocity of field 0 into u; false where the fields
+// separate (or have no normal) and nothing changes.
+SMPM_INLINE bool coulomb(const GridView& G, std::size_t a, std::size_t b, const double* c, const ContactParams& p,
+                         double* u) {
+  if (p.weld) {  // FLIP's (APIC's: weld_fields)
+    for (int d = 0; d < kDim; ++d) u[d] = c[d];
+    return true;
+  }
+  // sum_p m_p grad N_i(x_p) points out of each body (mass grows the other way)
+  double nrm[kDim], dv[kDim], t[kDim];
+  for (int d = 0; d < kDim; ++d) nrm[d] = G.gm[d][b] - G.gm[d][a];
+  const double len = std::sqrt(norm2(nrm));
+  if (!(len > 0.0)) return false;
+  for (int d = 0; d < kDim; ++d) nrm[d] /= len;
+  for (int d = 0; d < kDim; ++d) dv[d] = G.v[d][a] - c[d];
+  double dn = dv[0] * nrm[0];
+  for (int d = 1; d < kDim; ++d) dn += dv[d] * nrm[d];
+  if (dn >= 0.0) return false;  // separating: no contact force
+  for (int d = 0; d < kDim; ++d) t[d] = dv[d] - dn * nrm[d];
+  const double tl = std::sqrt(norm2(t));
+  if (tl <= p.friction * -dn) {
+    for (int d = 0; d < kDim; ++d) u[d] = c[d];
+  } else {
+    const double f = p.friction * -dn / tl;
+    for (int d = 0; d < kDim; ++d) u[d] = G.v[d][a] - dn * nrm[d] - f * t[d];
+  }
+  return true;
+}
+
+// The energy the contact step removes at a node (see the comment in grid_contact): fields a and
+// b of masses m0, m1 end at velocities u and w.
+SMPM_INLINE double contact_loss(const GridView& G, std::size_t a, std::size_t b, double m0, double m1,
+                                const double* u, const double* w, const GridUpdateParams& q,
+                                const ContactParams& c) {
+  const double M = m0 + m1;
+  const double s0 = q.scatter_velocity ? 1.0 : 1.0 / m0, s1 = q.scatter_velocity ? 1.0 : 1.0 / m1;
+  double loss = 0.0;
+  if (!c.midstep) {
+    const double mu = m0 * m1 / M;
+    double r2;
+    if (c.weld) {
+      double rv[kDim];
+      for (int d = 0; d < kDim; ++d) rv[d] = G.p[d][a] * s0 - G.p[d][b] * s1;
+      r2 = norm2(rv);
+    } else {
+      double dv[kDim], ev[kDim];
+      for (int d = 0; d < kDim; ++d) {
+        dv[d] = G.v[d][a] - G.v[d][b];
+        ev[d] = u[d] - w[d];
+      }
+      double s = norm2(dv);
+      for (int d = 0; d < kDim; ++d) s -= ev[d] * ev[d];
+      r2 = std::max(0.0, s);
+    }
+    loss = 0.5 * mu * r2;
+  }
+  for (int f = 0; f < 2 && c.midstep; ++f) {
+    const std::size_t k = f ? b : a;
+    const double m = f ? m1 : m0, sc = f ? s1 : s0;
+    const double* vf = f ? w : u;  // final velocity
+    double uf[kDim], jf[kDim];     // scatter velocity, impulse before contact
+    for (int d = 0; d < kDim; ++d) {
+      uf[d] = G.p[d][k] * sc;
+      jf[d] = m * (G.v[d][k] - uf[d]);
+    }
+    double kin = norm2(vf);
+    for (int d = 0; d < kDim; ++d) kin -= uf[d] * uf[d];
+    double work = jf[0] * (uf[0] + vf[0]);
+    for (int d = 1; d < kDim; ++d) work += jf[d] * (uf[d] + vf[d]);
+    loss -= 0.5 * m * kin - 0.5 * work;
+  }
+  return loss;
 }
 
 }  // namespace
@@ -179,52 +257,32 @@ void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const
 void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
                   const ContactParams& c, double* row_loss) {
   const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
-  if (row_loss) std::fill(row_loss, row_loss + g.sy(), 0.0);
+  if (row_loss) std::fill(row_loss, row_loss + g.num_lines(), 0.0);
   if (c.weld && q.scatter_velocity) {
     weld_fields(g, box, G, q, vmin, row_loss);
     return;
   }
-  int i0, i1;
-  real_columns(g, box, i0, i1);
+  const NodeBox bx = real_nodes(g, box);
   const std::size_t fs = G.fstride;
+  const int lines = bx.lines();
 #pragma omp parallel for schedule(static)
-  for (int j = box.j0; j <= box.j1; ++j) {
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = bx.line_start(r);
+    const int line = g.line(i);
     double row = 0.0;
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t a = g.node(i, j), b = a + fs;
+    for (i[0] = bx.lo[0]; i[0] <= bx.hi[0]; ++i[0]) {
+      const std::size_t a = g.node(i), b = a + fs;
       G.heat[a] = G.heat[b] = 0.0;
       const double m0 = G.m[a], m1 = G.m[b];
       if (m0 <= q.mass_eps || m1 <= q.mass_eps || G.vol[a] + G.vol[b] < vmin) continue;
       const double M = m0 + m1;
-      const double cx = (m0 * G.vx[a] + m1 * G.vx[b]) / M, cy = (m0 * G.vy[a] + m1 * G.vy[b]) / M;
-      double ux, uy;  // corrected velocity of field 0
-      if (c.weld) {  // FLIP's (APIC's: weld_fields)
-        ux = cx;
-        uy = cy;
-      } else {
-        // sum_p m_p grad N_i(x_p) points out of each body (mass grows the other way)
-        double nx = G.gmx[b] - G.gmx[a], ny = G.gmy[b] - G.gmy[a];
-        const double len = std::sqrt(nx * nx + ny * ny);
-        if (!(len > 0.0)) continue;
-        nx /= len;
-        ny /= len;
-        const double dx = G.vx[a] - cx, dy = G.vy[a] - cy;
-        const double dn = dx * nx + dy * ny;
-        if (dn >= 0.0) continue;  // separating: no contact force
-        const double tx = dx - dn * nx, ty = dy - dn * ny, tl = std::sqrt(tx * tx + ty * ty);
-        if (tl <= c.friction * -dn) {
-          ux = cx;
-          uy = cy;
-        } else {
-          const double f = c.friction * -dn / tl;
-          ux = G.vx[a] - dn * nx - f * tx;
-          uy = G.vy[a] - dn * ny - f * ty;
-        }
-      }
-      double wx = (M * cx - m0 * ux) / m1, wy = (M * cy - m0 * uy) / m1;
-      double scratch[4] = {0, 0, 0, 0};
-      constrain(g, q.walls, i, j, ux, uy, scratch);
-      constrain(g, q.walls, i, j, wx, wy, scratch);
+      double cm[kDim], u[kDim], w[kDim];  // centre of mass; corrected velocities of fields 0, 1
+      for (int d = 0; d < kDim; ++d) cm[d] = (m0 * G.v[d][a] + m1 * G.v[d][b]) / M;
+      if (!coulomb(G, a, b, cm, c, u)) continue;
+      for (int d = 0; d < kDim; ++d) w[d] = (M * cm[d] - m0 * u[d]) / m1;
+      double scratch[2 * kDim] = {};
+      constrain(g, q.walls, i, u, scratch);
+      constrain(g, q.walls, i, w, scratch);
       // Energy the contact step removes, per unit of the node's mass, for the heating gather.
       // Each field f goes from its scatter velocity u_f (walls applied) to its final velocity
       // v'_f; its impulse before contact J_f = m_f (v_f - u_f) works through the mid-step
@@ -238,73 +296,81 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
       // -1/2 m_f |v_f - u_f|^2 per field, which contact must not count: then a weld's loss is
       // 1/2 mu |u_0 - u_1|^2 (mu = m0 m1 / M, the node then balances as the single field's), a
       // Coulomb contact's the drop of 1/2 mu |v_0 - v_1|^2.
-      const double s0 = q.scatter_velocity ? 1.0 : 1.0 / m0, s1 = q.scatter_velocity ? 1.0 : 1.0 / m1;
-      double loss = 0.0;
-      if (!c.midstep) {
-        const double mu = m0 * m1 / M;
-        double r2;
-        if (c.weld) {
-          const double rx = G.px[a] * s0 - G.px[b] * s1, ry = G.py[a] * s0 - G.py[b] * s1;
-          r2 = rx * rx + ry * ry;
-        } else {
-          const double dx = G.vx[a] - G.vx[b], dy = G.vy[a] - G.vy[b], ex = ux - wx, ey = uy - wy;
-          r2 = std::max(0.0, dx * dx + dy * dy - ex * ex - ey * ey);
-        }
-        loss = 0.5 * mu * r2;
-      }
-      for (int f = 0; f < 2 && c.midstep; ++f) {
-        const std::size_t k = f ? b : a;
-        const double m = f ? m1 : m0, sc = f ? s1 : s0;
-        const double uxf = G.px[k] * sc, uyf = G.py[k] * sc;  // scatter velocity
-        const double vxf = f ? wx : ux, vyf = f ? wy : uy;    // final velocity
-        const double jx = m * (G.vx[k] - uxf), jy = m * (G.vy[k] - uyf);
-        loss -= 0.5 * m * (vxf * vxf + vyf * vyf - uxf * uxf - uyf * uyf) - 0.5 * (jx * (uxf + vxf) + jy * (uyf + vyf));
-      }
+      const double loss = contact_loss(G, a, b, m0, m1, u, w, q, c);
       G.heat[a] = G.heat[b] = loss / M;
       row += loss;
-      if (q.flip) {
-        G.dvx[a] += ux - G.vx[a];
-        G.dvy[a] += uy - G.vy[a];
-        G.dvx[b] += wx - G.vx[b];
-        G.dvy[b] += wy - G.vy[b];
+      for (int d = 0; d < kDim; ++d) {
+        if (q.flip) {
+          G.dv[d][a] += u[d] - G.v[d][a];
+          G.dv[d][b] += w[d] - G.v[d][b];
+        }
+        G.v[d][a] = u[d];
+        G.v[d][b] = w[d];
       }
-      G.vx[a] = ux;
-      G.vy[a] = uy;
-      G.vx[b] = wx;
-      G.vy[b] = wy;
     }
-    if (row_loss) row_loss[j + g.pad] = row;
+    if (row_loss) row_loss[line] = row;
   }
 }
 
-void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count) {
-  if (!g.periodic_x) return;
+namespace {
+
+// Node k of box b, counted with axis 0 fastest.
+inline Idx<kDim> box_node(const NodeBox& b, std::size_t k) {
+  Idx<kDim> i;
+  for (int d = 0; d < kDim; ++d) {
+    const std::size_t len = static_cast<std::size_t>(b.hi[d] - b.lo[d] + 1);
+    i[d] = b.lo[d] + static_cast<int>(k % len);
+    k /= len;
+  }
+  return i;
+}
+
+// The ghosts of periodic axis d, over the box's other axes: fold adds each ghost node onto the
+// node it stands for and zeroes it (low ghosts first, then high); fill copies the real node
+// into the ghost.
+template <bool Fold>
+void periodic_axis(const GridGeom& g, const NodeBox& b, int d, double* const* arrays, int count) {
+  NodeBox layer = b;
+  layer.lo[d] = layer.hi[d] = 0;
+  const std::ptrdiff_t cnt = static_cast<std::ptrdiff_t>(layer.nodes());
+  const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(g.stride(d)), n = g.cells(d);
 #pragma omp parallel for schedule(static)
-  for (int j = b.j0; j <= b.j1; ++j) {
-    for (int k = 0; k < count; ++k) {
-      double* a = arrays[k];
-      for (int i = -g.pad; i < 0; ++i) {
-        a[g.node(i + g.nx, j)] += a[g.node(i, j)];
-        a[g.node(i, j)] = 0.0;
+  for (std::ptrdiff_t k = 0; k < cnt; ++k) {
+    const std::ptrdiff_t n0 = static_cast<std::ptrdiff_t>(g.node(box_node(layer, static_cast<std::size_t>(k))));
+    for (int a = 0; a < count; ++a) {
+      double* A = arrays[a];
+      for (std::ptrdiff_t c = -g.pad; c < 0; ++c) {
+        const std::ptrdiff_t ghost = n0 + c * step, real = n0 + (c + n) * step;
+        if (Fold) {
+          A[real] += A[ghost];
+          A[ghost] = 0.0;
+        } else {
+          A[ghost] = A[real];
+        }
       }
-      for (int i = g.nx; i <= g.nx + g.pad; ++i) {
-        a[g.node(i - g.nx, j)] += a[g.node(i, j)];
-        a[g.node(i, j)] = 0.0;
+      for (std::ptrdiff_t c = n; c <= n + g.pad; ++c) {
+        const std::ptrdiff_t ghost = n0 + c * step, real = n0 + (c - n) * step;
+        if (Fold) {
+          A[real] += A[ghost];
+          A[ghost] = 0.0;
+        } else {
+          A[ghost] = A[real];
+        }
       }
     }
   }
+}
+
+}  // namespace
+
+void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count) {
+  for (int d = 0; d < kDim; ++d)
+    if (g.periodic(d)) periodic_axis<true>(g, b, d, arrays, count);
 }
 
 void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* arrays, int count) {
-  if (!g.periodic_x) return;
-#pragma omp parallel for schedule(static)
-  for (int j = b.j0; j <= b.j1; ++j) {
-    for (int k = 0; k < count; ++k) {
-      double* a = arrays[k];
-      for (int i = -g.pad; i < 0; ++i) a[g.node(i, j)] = a[g.node(i + g.nx, j)];
-      for (int i = g.nx; i <= g.nx + g.pad; ++i) a[g.node(i, j)] = a[g.node(i - g.nx, j)];
-    }
-  }
+  for (int d = kDim - 1; d >= 0; --d)
+    if (g.periodic(d)) periodic_axis<false>(g, b, d, arrays, count);
 }
 
 }  // namespace smpm::kern

@@ -8,15 +8,22 @@ namespace smpm::kern {
 
 enum class Wall : int { None = 0, Slip = 1, NoSlip = 2 };
 
-// Walls sit on the domain edges x = x0, x0 + nx h, y = y0, y0 + ny h. A wall constrains every
-// node on or beyond it: Slip zeroes the normal velocity, NoSlip both components.
+// Walls sit on the domain's faces: the low one of axis d at origin_d, the high one at
+// origin_d + n_d h (left and right for x, bottom and top for y). A wall constrains every node on
+// or beyond it: Slip zeroes the normal velocity, NoSlip every component. A periodic axis has no
+// walls.
 struct Walls {
-  Wall left = Wall::None, right = Wall::None, bottom = Wall::None, top = Wall::None;
+  Wall lo[kDim] = {}, hi[kDim] = {};
+  bool any() const {
+    for (int d = 0; d < kDim; ++d)
+      if (lo[d] != Wall::None || hi[d] != Wall::None) return true;
+    return false;
+  }
 };
 
 struct GridUpdateParams {
   double dt = 0.0;
-  double gravity_x = 0.0, gravity_y = 0.0;  // [m/s^2]
+  double gravity[kDim] = {};  // [m/s^2]
   // Nodes with 0 < mass <= mass_eps (a particle's stencil tail, e.g. a linear-hat particle just
   // past a node) move with their momentum only: a force over such a mass would give an
   // arbitrarily large acceleration that the velocity gradient picks up through grad w.
@@ -36,12 +43,12 @@ struct GridUpdateParams {
 // Every grid pass works on the nodes of a box b (the step's occupied_nodes, or
 // g.all_nodes()); nodes outside it are neither read nor written.
 
-// Reaction of each wall on the material, summed per storage row so that the total is
-// formed in a fixed order (deterministic for any thread count). row_force has kRowSlots * sy()
-// entries per call: [left x, right x, bottom y, top y, kinetic energy the walls removed from
-// the scatter's velocities, 1/2 m |u - u_walls|^2 (J/m)] per row (0 outside the box); the caller
-// sums them.
-inline constexpr int kRowSlots = 5;
+// Reaction of each wall on the material, summed per storage line along x so that the total is
+// formed in a fixed order (deterministic for any thread count). row_force has kRowSlots *
+// num_lines() entries per call: [low and high wall of each axis (their normal component), the
+// kinetic energy the walls removed from the scatter's velocities, 1/2 m |u - u_walls|^2 (J/m)]
+// per line (0 outside the box); the caller sums them.
+inline constexpr int kRowSlots = 2 * kDim + 1;
 void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
                  double* row_force);
 
@@ -71,7 +78,7 @@ struct ContactParams {
   double volume_fraction = 1.0;
   bool midstep = false;  // the energy's work takes the mid-step velocity (kern::G2PParams::mid)
 };
-// row_loss (sy() entries, or null): the energy contact removed, summed per storage row.
+// row_loss (num_lines() entries, or null): the energy contact removed, summed per storage row.
 void grid_contact(const GridGeom& g, const NodeBox& b, const GridView& G, const GridUpdateParams& q,
                   const ContactParams& c, double* row_loss = nullptr);
 
@@ -81,8 +88,10 @@ void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& b, const Grid
 // Zero the arrays a P2G writes (mass and forces only when `all`), every field.
 void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all);
 
-// Periodic x: add ghost-column sums onto their real columns (after P2G), and copy real
-// columns into ghost columns (after the grid update) for the arrays named.
+// Every periodic axis: add the ghost nodes' sums onto the nodes they stand for (after a scatter;
+// axes in order), and copy the real nodes into the ghosts (after the grid update; axes in
+// reverse order, so that corner ghosts take filled values), for the arrays given. Called through
+// Grid::fold and Grid::fill (engine/grid.hpp), which name the arrays.
 void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
 void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
 

@@ -2,55 +2,50 @@
 
 namespace smpm::kern {
 
-void heat_conduct(const GridGeom& g, const HeatGrid& H, double k, double c_min, double dt) {
-  const int i0 = g.periodic_x ? 0 : -g.pad, i1 = g.periodic_x ? g.nx - 1 : g.nx + g.pad;
-  const int j0 = -g.pad, j1 = g.ny + g.pad;
-  // nodal temperatures first (a separate pass: every flux needs both ends)
+void heat_temperatures(const GridGeom& g, const HeatGrid& H) {
+  const NodeBox all = g.all_nodes();
+  const int lines = all.lines(), len = all.hi[0] - all.lo[0] + 1;
 #pragma omp parallel for schedule(static)
-  for (int j = j0; j <= j1; ++j)
-    for (int i = -g.pad; i <= g.nx + g.pad; ++i) {
-      H.dT[g.node(i, j)] = 0.0;
-      const std::size_t n = g.node(i, j);
+  for (int r = 0; r < lines; ++r) {
+    const std::size_t n0 = g.node(all.line_start(r));
+    for (int i = 0; i < len; ++i) {
+      const std::size_t n = n0 + static_cast<std::size_t>(i);
+      H.dT[n] = 0.0;
       H.T[n] = H.cap[n] > 0.0 ? H.capT[n] / H.cap[n] : 0.0;
     }
-  // periodic: ghost columns carry the temperatures of the columns they stand for
-  if (g.periodic_x) {
-#pragma omp parallel for schedule(static)
-    for (int j = j0; j <= j1; ++j) {
-      for (int i = -g.pad; i < 0; ++i) {
-        H.T[g.node(i, j)] = H.T[g.node(i + g.nx, j)];
-        H.cap[g.node(i, j)] = H.cap[g.node(i + g.nx, j)];
-      }
-      for (int i = g.nx; i <= g.nx + g.pad; ++i) {
-        H.T[g.node(i, j)] = H.T[g.node(i - g.nx, j)];
-        H.cap[g.node(i, j)] = H.cap[g.node(i - g.nx, j)];
-      }
-    }
   }
-  // fluxes into capT (reused as the heat power Q_i)
+}
+
+void heat_conduct(const GridGeom& g, const HeatGrid& H, double k, double c_min, double dt) {
+  const NodeBox all = g.all_nodes(), b = real_nodes(g, all);
+  const int lines = b.lines();
+  // fluxes into capT (reused as the heat power Q_i): the two neighbours along each axis, the
+  // low one first, where they exist in the storage
 #pragma omp parallel for schedule(static)
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t n = g.node(i, j);
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
+      const std::size_t n = g.node(i);
       double Q = 0.0;
       if (H.cap[n] >= c_min) {
         const double T = H.T[n];
-        const std::size_t nb[4] = {i > -g.pad ? n - 1 : n, i < g.nx + g.pad ? n + 1 : n,
-                                   j > j0 ? n - g.sx() : n, j < j1 ? n + g.sx() : n};
-        for (std::size_t m : nb)
-          if (m != n && H.cap[m] >= c_min) Q += k * (H.T[m] - T);
+        for (int d = 0; d < kDim; ++d) {
+          const std::size_t s = g.stride(d);
+          const std::size_t nb[2] = {i[d] > all.lo[d] ? n - s : n, i[d] < all.hi[d] ? n + s : n};
+          for (std::size_t m : nb)
+            if (m != n && H.cap[m] >= c_min) Q += k * (H.T[m] - T);
+        }
       }
       H.capT[n] = Q;
     }
+  }
 #pragma omp parallel for schedule(static)
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i) {
-      const std::size_t n = g.node(i, j);
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
+      const std::size_t n = g.node(i);
       H.dT[n] = H.cap[n] >= c_min ? dt * H.capT[n] / H.cap[n] : 0.0;
     }
-  if (g.periodic_x) {
-    double* a[] = {H.dT};  // (T's ghosts were filled above)
-    fill_periodic_ghosts(g, g.all_nodes(), a, 1);
   }
 }
 

@@ -32,35 +32,40 @@ struct HeatGrid {
 };
 
 struct HeatParticles {
-  const double* x; const double* y; const double* m;
+  const double* x[kDim];    // position [m]
+  const double* m;
   const double* T;          // temperature [K]
   const std::uint8_t* body;
   const double* cv_body;    // specific heat per body [J/(kg K)]
   double* e;                // specific internal energy [J/kg]
 };
 
+// The point's stencil (x - origin) * (1 / h) per axis, as the transfers form it.
+template <class Shape>
+SMPM_INLINE Stencil<Shape, kDim> heat_stencil(const GridGeom& g, const HeatParticles& P, std::size_t p, double lp) {
+  const double inv_h = 1.0 / g.h;
+  Vec<kDim> xg;
+  for (int d = 0; d < kDim; ++d) xg[d] = (P.x[d][p] - g.origin(d)) * inv_h;
+  return Stencil<Shape, kDim>(xg, lp);
+}
+
 template <class Shape>
 void heat_scatter(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, const std::uint32_t* order,
                   const std::uint32_t* cell_start, double lp) {
-  const double inv_h = 1.0 / g.h;
   for_each_tile_colored<2>(
       g, cell_start,
       [&](const TileBlock& blk, std::uint32_t s0, std::uint32_t s1) {
+        const TileSink<2> sink{blk.s, blk.lo, blk.span};
         for (std::uint32_t s = s0; s < s1; ++s) {
           const std::uint32_t p = order[s];
-          constexpr int N = Shape::N;
-          double wx[N], wy[N], dwx[N], dwy[N];
-          const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
-          const int bx = Shape::eval(xg, lp, wx, dwx), by = Shape::eval(yg, lp, wy, dwy);
+          const auto st = heat_stencil<Shape>(g, P, p, lp);
           const double c = P.m[p] * P.cv_body[P.body[p]], cT = c * P.T[p];
-          for (int b = 0; b < N; ++b) {
-            double* row = blk.s + 2 * ((by + b - blk.j0) * blk.span + (bx - blk.i0));
-            for (int a = 0; a < N; ++a) {
-              const double w = wx[a] * wy[b];
-              row[2 * a] += w * c;
-              row[2 * a + 1] += w * cT;
-            }
-          }
+          st.for_each([&](const Idx<kDim>& a, int) {
+            double* v = blk.s + 2 * sink.node(node_of(st, a));
+            const double w = st.weight(a);
+            v[0] += w * c;
+            v[1] += w * cT;
+          });
         }
       },
       [&](const double* v, std::size_t n, int) {
@@ -69,28 +74,25 @@ void heat_scatter(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, 
       });
 }
 
-// Nodal temperature change; nodes outside the conducting set get dT = 0.
+// Nodal temperatures T_i = S_i / C_i (0 where C_i = 0) on every node, ghosts included.
+void heat_temperatures(const GridGeom& g, const HeatGrid& H);
+// Nodal temperature change from the fluxes between axis neighbours (ghosts filled: the caller's
+// halo phase); nodes outside the conducting set get dT = 0. capT becomes the heat power Q_i.
 void heat_conduct(const GridGeom& g, const HeatGrid& H, double conductivity, double c_min, double dt);
 
 template <class Shape>
 void heat_gather(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, std::size_t n, double lp,
                  double phi) {
-  const double inv_h = 1.0 / g.h;
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) {
-    constexpr int N = Shape::N;
-    double wx[N], wy[N], dwx[N], dwy[N];
-    const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
-    const int bx = Shape::eval(xg, lp, wx, dwx), by = Shape::eval(yg, lp, wy, dwy);
+    const auto st = heat_stencil<Shape>(g, P, p, lp);
     double dT = 0.0, T = 0.0;
-    for (int b = 0; b < N; ++b) {
-      const std::size_t row = g.node(bx, by + b);
-      for (int a = 0; a < N; ++a) {
-        const double w = wx[a] * wy[b];
-        dT += w * H.dT[row + a];
-        T += w * H.T[row + a];
-      }
-    }
+    st.for_each([&](const Idx<kDim>& a, int) {
+      const std::size_t k = g.node(node_of(st, a));
+      const double w = st.weight(a);
+      dT += w * H.dT[k];
+      T += w * H.T[k];
+    });
     P.e[p] += P.cv_body[P.body[p]] * (dT + phi * (T - P.T[p]));
   }
 }

@@ -6,21 +6,22 @@
 
 namespace smpm::kern {
 
-std::ptrdiff_t compute_keys(const GridGeom& g, const double* x, const double* y, std::size_t n,
-                            std::uint32_t* key) {
+std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key) {
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel
   {
-    // thread-local geometry and restrict pointers (through the shared ones GCC reloads them
-    // per point)
+    // thread-local geometry and pointers (through the shared ones GCC reloads them per point)
     const KeyGeom gl(g);
-    const double* __restrict xl = x;
-    const double* __restrict yl = y;
+    const double* pl[kDim];
+    for (int d = 0; d < kDim; ++d) pl[d] = pos[d];
     std::uint32_t* __restrict kl = key;
 #pragma omp for simd schedule(static) reduction(min : bad)
     for (std::size_t i = 0; i < n; ++i) {
+      double x[kDim];
+#pragma GCC unroll 3
+      for (int d = 0; d < kDim; ++d) x[d] = pl[d][i];
       std::uint32_t k;
-      const bool inside = cell_key(gl, xl[i], yl[i], k);
+      const bool inside = cell_key(gl, x, k);
       kl[i] = k;
       bad = std::min(bad, inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
     }

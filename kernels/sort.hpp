@@ -12,36 +12,51 @@ namespace smpm::kern {
 
 // What a cell key needs of the grid, as doubles: integer arithmetic in doubles is exact here
 // (every value is an integer below 2^32) and the vector units do it without conversions; and
-// no integer division (GridGeom::tiles_x) left in the loop, which GCC does not hoist.
+// no integer division (GridGeom::tiles) left in the loop, which GCC does not hoist.
 struct KeyGeom {
-  double x0, y0, inv_h, nx, ny, tile, inv_tile, tiles_x, cells_per_tile;
+  double origin[kDim], n[kDim], tiles[kDim];
+  double inv_h, tile, inv_tile, cells_per_tile;
   explicit KeyGeom(const GridGeom& g)
-      : x0(g.x0), y0(g.y0), inv_h(1.0 / g.h), nx(g.nx), ny(g.ny), tile(g.tile), inv_tile(1.0 / g.tile),
-        tiles_x(g.tiles_x()), cells_per_tile(g.cells_per_tile()) {}
+      : inv_h(1.0 / g.h), tile(g.tile), inv_tile(1.0 / g.tile), cells_per_tile(g.cells_per_tile()) {
+    for (int d = 0; d < kDim; ++d) {
+      origin[d] = g.origin(d);
+      n[d] = g.cells(d);
+      tiles[d] = g.tiles(d);
+    }
+  }
 };
 
-// Key of the cell holding (x, y): tile-major, then row-major inside the tile. Grid units are
-// (x - x0) * (1 / h), the same expression as the transfers' (kernels/transfer.hpp): a key and a
-// stencil computed from one position agree on its cell even at a cell edge, which the colored
-// scatter's tile halo relies on. Branch-free, so compute_keys vectorizes. Returns false (key
-// then holds the key of cell (0, 0)) when the point is outside [x0, x0+nx h) x [y0, y0+ny h) or NaN.
-SMPM_INLINE bool cell_key(const KeyGeom& g, double x, double y, std::uint32_t& key) {
-  const double xg = (x - g.x0) * g.inv_h, yg = (y - g.y0) * g.inv_h;
-  // also rejects NaN
-  const bool inside = (xg >= 0.0) & (xg < g.nx) & (yg >= 0.0) & (yg < g.ny);
-  const double cx = inside ? std::trunc(xg) : 0.0, cy = inside ? std::trunc(yg) : 0.0;
-  double tx = std::trunc(cx * g.inv_tile), ty = std::trunc(cy * g.inv_tile);
-  tx = (tx + 1.0) * g.tile <= cx ? tx + 1.0 : tx;  // cx * (1 / tile) may round below an integer
-  ty = (ty + 1.0) * g.tile <= cy ? ty + 1.0 : ty;
-  const double lx = cx - tx * g.tile, ly = cy - ty * g.tile;
-  key = static_cast<std::uint32_t>((ty * g.tiles_x + tx) * g.cells_per_tile + ly * g.tile + lx);
+// Key of the cell holding point x: tile-major (tiles numbered with x fastest), then the cell
+// inside the tile (x fastest). Grid units are (x - origin) * (1 / h), the same expression as the
+// transfers' (kernels/transfer.hpp): a key and a stencil computed from one position agree on its
+// cell even at a cell edge, which the colored scatter's tile halo relies on. Branch-free, so
+// compute_keys vectorizes. Returns false (key then holds the key of cell 0) when the point is
+// outside the grid's cells [origin, origin + n h) on some axis, or NaN.
+SMPM_INLINE bool cell_key(const KeyGeom& g, const double* x, std::uint32_t& key) {
+  double xg[kDim];
+  bool inside = true;
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) {
+    xg[d] = (x[d] - g.origin[d]) * g.inv_h;
+    inside = inside & (xg[d] >= 0.0) & (xg[d] < g.n[d]);  // also rejects NaN
+  }
+  double t = 0.0, l = 0.0;  // tile index, cell index inside the tile
+#pragma GCC unroll 3
+  for (int d = kDim - 1; d >= 0; --d) {
+    const double c = inside ? std::trunc(xg[d]) : 0.0;
+    double td = std::trunc(c * g.inv_tile);
+    td = (td + 1.0) * g.tile <= c ? td + 1.0 : td;  // c * (1 / tile) may round below an integer
+    t = d == kDim - 1 ? td : t * g.tiles[d] + td;
+    const double ld = c - td * g.tile;
+    l = d == kDim - 1 ? ld : l * g.tile + ld;
+  }
+  key = static_cast<std::uint32_t>(t * g.cells_per_tile + l);
   return inside;
 }
 
-// Computes key[i] for every particle. Returns the lowest index of a particle outside the
-// grid (or NaN), or -1 when all are inside.
-std::ptrdiff_t compute_keys(const GridGeom& g, const double* x, const double* y, std::size_t n,
-                            std::uint32_t* key);
+// Computes key[i] for every particle, pos[d] its coordinate arrays. Returns the lowest index of
+// a particle outside the grid (or NaN), or -1 when all are inside.
+std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key);
 
 // Stable counting sort of the keys. Outputs: cell_start[k] (size nkeys + 1), the first sorted
 // position of key k; order[s], the particle at sorted position s. hist is scratch of

@@ -94,6 +94,14 @@ struct Spin {
   SMPM_INLINE double operator[](int k) const { return c[k]; }
 };
 
+// |v|^2 of a kDim-vector, summed in axis order.
+SMPM_INLINE double norm2(const double* v) {
+  double s = v[0] * v[0];
+#pragma GCC unroll 3
+  for (int d = 1; d < kDim; ++d) s += v[d] * v[d];
+  return s;
+}
+
 // sym(L) and the spin of a velocity gradient, each entry formed as 0.5 (L_ab +- L_ba) (the
 // diagonal as L_aa itself).
 template <int D>
@@ -101,7 +109,6 @@ SMPM_INLINE Sym<D> sym_part(const Mat<D>& L) {
   Sym<D> s;
 #pragma GCC unroll 3
   for (int d = 0; d < D; ++d) s[d] = L(d, d);
-#pragma GCC unroll 6
   for (int k = D; k < Sym<D>::K; ++k) {
     const int a = sym_row(D, k), b = sym_col(D, k);
     s[k] = 0.5 * (L(a, b) + L(b, a));
@@ -111,7 +118,6 @@ SMPM_INLINE Sym<D> sym_part(const Mat<D>& L) {
 template <int D>
 SMPM_INLINE Spin<D> spin_part(const Mat<D>& L) {
   Spin<D> w;
-#pragma GCC unroll 6
   for (int k = D; k < Sym<D>::K; ++k) {
     const int a = sym_row(D, k), b = sym_col(D, k);
     w[k - D] = 0.5 * (L(a, b) - L(b, a));

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "stencil.hpp"
 #include "views.hpp"
 
 namespace smpm::kern {
@@ -37,20 +38,17 @@ template <class Add>
 struct GridSink {
   const GridGeom& g;
   const GridView& G;
-  std::size_t row(int i, int j) const { return g.node(i, j); }
+  std::size_t node(const Idx<kDim>& i) const { return g.node(i); }
   std::size_t field_offset(std::size_t f) const { return f * G.fstride; }
-  inline void add_momentum(std::size_t n, double qx, double qy) const {
-    Add::add(G.px[n], qx);
-    Add::add(G.py[n], qy);
+  inline void add_momentum(std::size_t n, const double* q) const {
+    for (int d = 0; d < kDim; ++d) Add::add(G.p[d][n], q[d]);
   }
-  inline void add_mass_force(std::size_t n, double m, double fx, double fy) const {
+  inline void add_mass_force(std::size_t n, double m, const double* f) const {
     Add::add(G.m[n], m);
-    Add::add(G.fx[n], fx);
-    Add::add(G.fy[n], fy);
+    for (int d = 0; d < kDim; ++d) Add::add(G.f[d][n], f[d]);
   }
-  inline void add_contact(std::size_t n, double gmx, double gmy, double vol) const {
-    Add::add(G.gmx[n], gmx);
-    Add::add(G.gmy[n], gmy);
+  inline void add_contact(std::size_t n, const double* gm, double vol) const {
+    for (int d = 0; d < kDim; ++d) Add::add(G.gm[d][n], gm[d]);
     Add::add(G.vol[n], vol);
   }
   inline void add_volume(std::size_t n, double vol) const { Add::add(G.vol[n], vol); }
@@ -58,86 +56,130 @@ struct GridSink {
 
 // Largest tile width the scratch block is sized for (grid.tile_cells is checked against it).
 inline constexpr int kMaxTile = 16;
-// Nodes a tile's particles reach: cells c in [t0, t0 + tile) touch nodes c - 1 .. c + 2
-// (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
+// Nodes a tile's particles reach along an axis: cells c in [t0, t0 + tile) touch nodes c - 1 ..
+// c + 2 (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
 inline constexpr int tile_span(int tile) { return tile + 3; }
 
-// K values per node: m, px, py, fx, fy (K = 5); with contact also grad m (2) and volume (K = 8),
-// or the volume alone (K = 6, a weld).
-// Velocity fields follow each other, span * span nodes apart.
+// Slots per node of a scatter's scratch block: the mass, then kDim momentum and kDim force
+// components; with two-body contact also kDim mass-gradient components and the volume, with a
+// weld the volume alone.
+struct Slot {
+  static constexpr int mass = 0, momentum = 1, force = 1 + kDim, contact = 1 + 2 * kDim;
+  static constexpr int count(bool contact, bool normals) {
+    return contact ? (normals ? 2 + 3 * kDim : 2 + 2 * kDim) : 1 + 2 * kDim;
+  }
+};
+
+// K values per node (Slot); velocity fields follow each other, span^kDim nodes apart.
 template <int K>
 struct TileSink {
   double* s;
-  int i0, j0, span;
-  std::size_t row(int i, int j) const { return static_cast<std::size_t>((j - j0) * span + (i - i0)); }
-  std::size_t field_offset(std::size_t f) const { return f * static_cast<std::size_t>(span * span); }
-  inline void add_momentum(std::size_t n, double qx, double qy) const {
-    s[K * n + 1] += qx;
-    s[K * n + 2] += qy;
+  Idx<kDim> lo;
+  int span;
+  std::size_t node(const Idx<kDim>& i) const {
+    std::size_t k = 0;
+    for (int d = kDim - 1; d >= 0; --d) k = k * static_cast<std::size_t>(span) + static_cast<std::size_t>(i[d] - lo[d]);
+    return k;
   }
-  inline void add_mass_force(std::size_t n, double m, double fx, double fy) const {
-    s[K * n + 0] += m;
-    s[K * n + 3] += fx;
-    s[K * n + 4] += fy;
+  std::size_t field_offset(std::size_t f) const { return f * static_cast<std::size_t>(ipow(span, kDim)); }
+  inline void add_momentum(std::size_t n, const double* q) const {
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::momentum + d] += q[d];
   }
-  inline void add_contact(std::size_t n, double gmx, double gmy, double vol) const {
-    s[K * n + 5] += gmx;
-    s[K * n + 6] += gmy;
-    s[K * n + 7] += vol;
+  inline void add_mass_force(std::size_t n, double m, const double* f) const {
+    s[K * n + Slot::mass] += m;
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::force + d] += f[d];
   }
-  inline void add_volume(std::size_t n, double vol) const { s[K * n + 5] += vol; }  // K = 6
+  inline void add_contact(std::size_t n, const double* gm, double vol) const {
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::contact + d] += gm[d];
+    s[K * n + Slot::contact + kDim] += vol;
+  }
+  inline void add_volume(std::size_t n, double vol) const { s[K * n + Slot::contact] += vol; }
 };
+
+// A point's position in grid units, (x - origin) * (1 / h) per axis.
+SMPM_INLINE Vec<kDim> grid_units(const GridGeom& g, const ParticleView& P, std::size_t p, double inv_h) {
+  Vec<kDim> xg;
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) xg[d] = (P.pos(d)[p] - g.origin(d)) * inv_h;
+  return xg;
+}
+// The stencil's node i (its offsets a) as grid indices.
+template <class St>
+SMPM_INLINE Idx<kDim> node_of(const St& st, const Idx<kDim>& a) {
+  Idx<kDim> i;
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) i[d] = st.base[d] + a[d];
+  return i;
+}
 
 // Scatter of one particle p into its velocity field. APIC adds the affine momentum
 // m C (x_i - x_p). Contact also scatters the volume, and with Normals the mass gradient (the
-// contact normals of two bodies; a weld of void faces needs none).
+// contact normals of two bodies; a weld of void faces needs none). The internal force at node i
+// is -V sigma grad w_i (sigma = s - (p + q) I).
 template <class Shape, bool APIC, P2GWhat What, class Sink, bool Contact = false, bool Normals = true>
 inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView& P, std::uint32_t p,
                          double lp) {
-  constexpr int N = Shape::N;
+  constexpr int D = kDim;
   const double inv_h = 1.0 / g.h;
-  const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
-  double wx[N], wy[N], dwx[N], dwy[N];
-  const int bx = Shape::eval(xg, lp, wx, dwx);
-  const int by = Shape::eval(yg, lp, wy, dwy);
+  const Stencil<Shape, D> st(grid_units(g, P, p, inv_h), lp);
   const double m = P.m[p];
-  const double mvx = m * P.vx[p], mvy = m * P.vy[p];
-  double mCxx = 0, mCxy = 0, mCyx = 0, mCyy = 0;
+  double mv[D], mC[D][D] = {};
+#pragma GCC unroll 3
+  for (int d = 0; d < D; ++d) mv[d] = m * P.vel(d)[p];
   if constexpr (APIC) {  // grid-unit offsets: fold h in here
-    mCxx = m * P.Cxx[p] * g.h; mCxy = m * P.Cxy[p] * g.h;
-    mCyx = m * P.Cyx[p] * g.h; mCyy = m * P.Cyy[p] * g.h;
+#pragma GCC unroll 3
+    for (int r = 0; r < D; ++r)
+#pragma GCC unroll 3
+      for (int c = 0; c < D; ++c) mC[r][c] = m * P.affine(r, c)[p] * g.h;
   }
-  double vsxx = 0, vsyy = 0, vsxy = 0;  // -V sigma / h
+  double vs[D][D] = {};  // -V sigma / h
   if constexpr (What == P2GWhat::All) {
     const double Vh = P.V[p] * inv_h;
     const double pq = P.q ? P.p[p] + P.q[p] : P.p[p];
-    vsxx = -Vh * (P.sxx[p] - pq);
-    vsyy = -Vh * (P.syy[p] - pq);
-    vsxy = -Vh * P.sxy[p];
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) vs[d][d] = -Vh * (P.dev(d)[p] - pq);
+    for (int k = D; k < sym_size(D); ++k) {
+      const int a = sym_row(D, k), b = sym_col(D, k);
+      vs[a][b] = vs[b][a] = -Vh * P.dev(k)[p];
+    }
   }
   const std::size_t foff = Contact ? sink.field_offset(P.field(p)) : 0;
   const double mh = m * inv_h, Vp = Contact ? P.V[p] : 0.0;
-  for (int b = 0; b < N; ++b) {
-    const std::size_t row = sink.row(bx, by + b) + foff;
-    const double dy = (by + b) - yg;
-    for (int a = 0; a < N; ++a) {
-      const std::size_t n = row + a;
-      const double w = wx[a] * wy[b];
-      double qx = mvx, qy = mvy;
+  st.for_each([&](const Idx<D>& a, int) {
+    const std::size_t n = sink.node(node_of(st, a)) + foff;
+    const double w = st.weight(a);
+    double q[D];
+#pragma GCC unroll 3
+    for (int r = 0; r < D; ++r) {
+      q[r] = mv[r];
       if constexpr (APIC) {
-        const double dx = (bx + a) - xg;
-        qx += mCxx * dx + mCxy * dy;
-        qy += mCyx * dx + mCyy * dy;
+        double s = mC[r][0] * st.offset(a, 0);
+#pragma GCC unroll 3
+        for (int c = 1; c < D; ++c) s += mC[r][c] * st.offset(a, c);
+        q[r] += s;
       }
-      sink.add_momentum(n, w * qx, w * qy);
-      if constexpr (What == P2GWhat::All) {
-        const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
-        sink.add_mass_force(n, w * m, vsxx * gx + vsxy * gy, vsxy * gx + vsyy * gy);
-        if constexpr (Contact && Normals) sink.add_contact(n, mh * gx, mh * gy, w * Vp);
-        if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
-      }
+      q[r] = w * q[r];
     }
-  }
+    sink.add_momentum(n, q);
+    if constexpr (What == P2GWhat::All) {
+      const Vec<D> gr = st.gradient(a);
+      double f[D];
+#pragma GCC unroll 3
+      for (int r = 0; r < D; ++r) {
+        f[r] = vs[r][0] * gr[0];
+#pragma GCC unroll 3
+        for (int c = 1; c < D; ++c) f[r] += vs[r][c] * gr[c];
+      }
+      sink.add_mass_force(n, w * m, f);
+      if constexpr (Contact && Normals) {
+        double gm[D];
+#pragma GCC unroll 3
+        for (int d = 0; d < D; ++d) gm[d] = mh * gr[d];
+        sink.add_contact(n, gm, w * Vp);
+      }
+      if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
+    }
+  });
 }
 
 // Scatter of the particles at sorted positions [s0, s1) into a sink.
@@ -148,58 +190,93 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
     p2g_particle<Shape, APIC, What, Sink, Contact, Normals>(g, sink, P, order[s], lp);
 }
 
-// Colored iteration over tiles: tiles of one color (tile parity in x and y) touch disjoint
-// nodes (tile width > stencil reach), so they run in parallel with plain adds; the 4 colors run
-// one after another. Each tile accumulates K values per node into an L1/L2-resident scratch
-// block covering its footprint (body(block, s0, s1) for the particles at sorted positions
-// [s0, s1)), then the block is handed node by node to flush(values, grid_node, f), clipped to
-// the node storage (a partial last tile's block reaches past it). With F fields (F <= FMax, the
-// scratch's capacity) the block holds F sub-blocks of span * span nodes, field f's at
-// f * K * span * span; fields(s0, s1) says which of them the tile's particles scatter into
-// (bit f), and only those are zeroed and flushed (a four-field run's tiles mostly hold two or
-// three). Fixed tile order and fixed particle order within a tile make every node's sum
-// independent of the thread count.
+// Colored iteration over tiles: tiles of one color (tile parity along every axis) touch
+// disjoint nodes (tile width > stencil reach), so they run in parallel with plain adds; the
+// 2^kDim colors run one after another. Each tile accumulates K values per node into an
+// L1/L2-resident scratch block covering its footprint (body(block, s0, s1) for the particles at
+// sorted positions [s0, s1)), then the block is handed node by node to flush(values,
+// grid_node, f), clipped to the node storage (a partial last tile's block reaches past it).
+// With F fields (F <= FMax, the scratch's capacity) the block holds F sub-blocks of span^kDim
+// nodes, field f's at f * K * span^kDim; fields(s0, s1) says which of them the tile's particles
+// scatter into (bit f), and only those are zeroed and flushed (a four-field run's tiles mostly
+// hold two or three). Fixed tile order and fixed particle order within a tile make every node's
+// sum independent of the thread count.
 struct TileBlock {
   double* s;
-  int i0, j0, span;
+  Idx<kDim> lo;  // the block's first node
+  int span;
 };
 struct OneField {
   unsigned operator()(std::uint32_t, std::uint32_t) const { return 1u; }
 };
 
+// Tile t's block of nodes, and its lines along x clipped to the node storage: f(line's first
+// node in the grid, its offset in the block's nodes, its length).
+template <class F>
+inline void for_each_block_line(const GridGeom& g, const TileBlock& blk, F&& f) {
+  int len[kDim];
+  for (int d = 0; d < kDim; ++d) len[d] = std::min(blk.span, g.cells(d) + g.pad - blk.lo[d] + 1);
+  int lines = 1;
+  for (int d = 1; d < kDim; ++d) lines *= len[d];
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = blk.lo;
+    std::size_t off = 0, span_d = 1;
+    int rest = r;
+    for (int d = 1; d < kDim; ++d) {
+      span_d *= static_cast<std::size_t>(blk.span);
+      const int o = rest % len[d];
+      rest /= len[d];
+      i[d] += o;
+      off += static_cast<std::size_t>(o) * span_d;
+    }
+    f(g.node(i), off, len[0]);
+  }
+}
+
 template <int K, int FMax = 1, class Body, class Flush, class Fields = OneField>
 void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, Body&& body, Flush&& flush, int F = 1,
                            Fields&& fields = Fields{}) {
   if (F < 1 || F > FMax) throw std::invalid_argument("colored scatter: " + std::to_string(F) + " velocity fields, at most " + std::to_string(FMax));
-  const int TX = g.tiles_x(), TY = g.tiles_y(), cpt = g.cells_per_tile();
+  int T[kDim];
+  for (int d = 0; d < kDim; ++d) T[d] = g.tiles(d);
+  const int cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
-  const std::size_t block = static_cast<std::size_t>(K) * span * span;
+  const std::size_t block = static_cast<std::size_t>(K) * ipow(span, kDim);
 #pragma omp parallel
   {
-    alignas(64) double scratch[K * FMax * tile_span(kMaxTile) * tile_span(kMaxTile)];
-    for (int color = 0; color < 4; ++color) {
-      const int cx = color & 1, cy = color >> 1;
-      const int ntx = (TX - cx + 1) / 2, nty = (TY - cy + 1) / 2;
+    alignas(64) double scratch[K * FMax * ipow(tile_span(kMaxTile), kDim)];
+    for (int color = 0; color < (1 << kDim); ++color) {
+      int nt[kDim], count = 1;
+      for (int d = 0; d < kDim; ++d) {
+        nt[d] = (T[d] - ((color >> d) & 1) + 1) / 2;
+        count *= nt[d];
+      }
 #pragma omp for schedule(dynamic, 1)
-      for (int k = 0; k < ntx * nty; ++k) {
-        const int tx = cx + 2 * (k % ntx), ty = cy + 2 * (k / ntx);
-        const std::size_t t = static_cast<std::size_t>(ty) * TX + tx;
+      for (int k = 0; k < count; ++k) {
+        // the tile's indices: this color's parity plus twice its place among the color's tiles
+        Idx<kDim> lo;
+        std::size_t t = 0, tstride = 1;
+        int rest = k;
+        for (int d = 0; d < kDim; ++d) {
+          const int td = ((color >> d) & 1) + 2 * (rest % nt[d]);
+          rest /= nt[d];
+          t += static_cast<std::size_t>(td) * tstride;
+          tstride *= static_cast<std::size_t>(T[d]);
+          lo[d] = td * g.tile - 1;
+        }
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
         if (s0 == s1) continue;
-        const TileBlock blk{scratch, tx * g.tile - 1, ty * g.tile - 1, span};
+        const TileBlock blk{scratch, lo, span};
         const unsigned used = F > 1 ? fields(s0, s1) : 1u;
         for (int f = 0; f < F; ++f)
           if ((used >> f) & 1u) std::fill(scratch + f * block, scratch + (f + 1) * block, 0.0);
         body(blk, s0, s1);
-        const int jn = std::min(span, g.ny + g.pad - blk.j0 + 1);
-        const int in = std::min(span, g.nx + g.pad - blk.i0 + 1);
         for (int f = 0; f < F; ++f) {
           if (!((used >> f) & 1u)) continue;
-          for (int jj = 0; jj < jn; ++jj) {
-            const std::size_t row = g.node(blk.i0, blk.j0 + jj);
-            const double* sr = scratch + f * block + K * jj * span;
-            for (int ii = 0; ii < in; ++ii) flush(sr + K * ii, row + ii, f);
-          }
+          for_each_block_line(g, blk, [&](std::size_t n0, std::size_t off, int len) {
+            const double* sr = scratch + f * block + K * off;
+            for (int i = 0; i < len; ++i) flush(sr + K * i, n0 + i, f);
+          });
         }
       }
     }
@@ -208,27 +285,36 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
 
 // The nodes the particles binned in cell_start reach: the union of the node blocks of the
 // occupied tiles (tile_span), which holds every node a colored scatter writes and every node a
-// gather reads. With periodic x it spans all columns (the fold and the ghost fill need them).
-// Empty without particles.
+// gather reads. Along a periodic axis it spans all nodes (the fold and the ghost fill need
+// them). Empty without particles.
 inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start) {
-  const int TX = g.tiles_x(), NT = g.num_tiles();
+  const int NT = g.num_tiles();
   const std::size_t cpt = static_cast<std::size_t>(g.cells_per_tile());
-  int tx0 = TX, tx1 = -1, ty0 = g.tiles_y(), ty1 = -1;
-#pragma omp parallel for schedule(static) reduction(min : tx0, ty0) reduction(max : tx1, ty1)
+  int T[kDim], t0[kDim], t1[kDim];
+  for (int d = 0; d < kDim; ++d) {
+    T[d] = g.tiles(d);
+    t0[d] = T[d];
+    t1[d] = -1;
+  }
+#pragma omp parallel for schedule(static) reduction(min : t0[:kDim]) reduction(max : t1[:kDim])
   for (int t = 0; t < NT; ++t) {
     if (cell_start[t * cpt] == cell_start[(t + 1) * cpt]) continue;
-    tx0 = std::min(tx0, t % TX);
-    tx1 = std::max(tx1, t % TX);
-    ty0 = std::min(ty0, t / TX);
-    ty1 = std::max(ty1, t / TX);
+    int rest = t;
+    for (int d = 0; d < kDim; ++d) {
+      const int td = rest % T[d];
+      rest /= T[d];
+      t0[d] = std::min(t0[d], td);
+      t1[d] = std::max(t1[d], td);
+    }
   }
-  if (tx1 < 0) return NodeBox{};
+  if (t1[0] < 0) return NodeBox{};
   const int last = tile_span(g.tile) - 1;  // a tile block's nodes: [t tile - 1, t tile - 1 + last]
   NodeBox b;
-  b.i0 = g.periodic_x ? -g.pad : tx0 * g.tile - 1;
-  b.i1 = g.periodic_x ? g.nx + g.pad : std::min(tx1 * g.tile - 1 + last, g.nx + g.pad);
-  b.j0 = ty0 * g.tile - 1;
-  b.j1 = std::min(ty1 * g.tile - 1 + last, g.ny + g.pad);
+  for (int d = 0; d < kDim; ++d) {
+    const int top = g.cells(d) + g.pad;
+    b.lo[d] = g.periodic(d) ? -g.pad : t0[d] * g.tile - 1;
+    b.hi[d] = g.periodic(d) ? top : std::min(t1[d] * g.tile - 1 + last, top);
+  }
   return b;
 }
 
@@ -238,28 +324,25 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  constexpr int K = Contact ? (Normals ? 8 : 6) : 5, FMax = Contact ? (Normals ? 2 : 4) : 1;
+  constexpr int K = Slot::count(Contact, Normals), FMax = Contact ? (Normals ? 2 : 4) : 1;
   const int F = Contact ? G.fields : 1;
   for_each_tile_colored<K, FMax>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
-        p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.i0, b.j0, b.span}, P, order,
-                                                                    s0, s1, lp);
+        p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.lo, b.span}, P, order, s0,
+                                                                    s1, lp);
       },
       [&](const double* v, std::size_t n0, int f) {
         const std::size_t n = n0 + f * G.fstride;
-        G.px[n] += v[1];
-        G.py[n] += v[2];
+        for (int d = 0; d < kDim; ++d) G.p[d][n] += v[Slot::momentum + d];
         if constexpr (What == P2GWhat::All) {
-          G.m[n] += v[0];
-          G.fx[n] += v[3];
-          G.fy[n] += v[4];
+          G.m[n] += v[Slot::mass];
+          for (int d = 0; d < kDim; ++d) G.f[d][n] += v[Slot::force + d];
           if constexpr (Contact && Normals) {
-            G.gmx[n] += v[5];
-            G.gmy[n] += v[6];
-            G.vol[n] += v[7];
+            for (int d = 0; d < kDim; ++d) G.gm[d][n] += v[Slot::contact + d];
+            G.vol[n] += v[Slot::contact + kDim];
           }
-          if constexpr (Contact && !Normals) G.vol[n] += v[5];
+          if constexpr (Contact && !Normals) G.vol[n] += v[Slot::contact];
         }
       },
       F,
@@ -294,8 +377,8 @@ struct G2PParams {
   double mid = 0.0;
   // Rigid walls are impenetrable: a point moved past one is put back on it. (With B-splines a
   // point in the first cell also feels nodes inside the material and can overshoot the wall
-  // by a fraction of dt |v|.) -inf / +inf where there is no wall.
-  double xmin = -1e300, xmax = 1e300, ymin = -1e300, ymax = 1e300;
+  // by a fraction of dt |v|.) Per axis; -inf / +inf where there is no wall.
+  double lo[kDim] = {-1e300, -1e300}, hi[kDim] = {1e300, 1e300};
 };
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
@@ -331,122 +414,207 @@ struct G2PParams {
 //
 // PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
 // the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
+// Moves point p with velocity v over q.dt: a periodic axis wraps it (the second test also
+// catches x + L rounding up to origin + L; selects, not branches, so the loop stays
+// vectorizable; L = 0 on other axes leaves x as it is), a wall puts it back on the wall.
+SMPM_INLINE void move_point(const GridGeom& g, const ParticleView& P, std::size_t p, const G2PParams& q,
+                            const double* v) {
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) {
+    double x = P.pos(d)[p] + q.dt * v[d];
+    const double o = g.origin(d), L = g.periodic(d) ? g.cells(d) * g.h : 0.0;
+    x = x < o ? x + L : x;
+    x = x >= o + L ? x - L : x;
+    P.pos(d)[p] = std::min(std::max(x, q.lo[d]), q.hi[d]);
+  }
+}
+
+// What the gather sums over a point's nodes (grid units: gradients and offsets per cell).
+struct GatherSums {
+  double v[kDim] = {}, dv[kDim] = {};    // sum w v_i, FLIP: sum w dv_i
+  double L[kDim][kDim] = {};             // sum v_i grad w^T
+  double W[kDim][kDim] = {};             // sum v_i^mid grad w^T (the work rate)
+  double B[kDim][kDim] = {};             // sum w v_i (x_i - x_p)^T
+  double v2 = 0, r2 = 0, d2 = 0, qc = 0;  // sum w |v_i|^2, the scatter loss, FLIP: sum w |dv_i|^2, contact loss
+};
+
+// L = sum_i v_i grad w_i^T [1/s] into Lout at li; with the work rate (WorkRate) also its
+// symmetric part sym(W) [1/s], the off-diagonal entries as 0.5 (W_ab + W_ba).
+template <bool WorkRate>
+SMPM_INLINE void store_gradient(const GatherSums& S, double inv_h, const Gradient& Lout, std::size_t li) {
+#pragma GCC unroll 3
+  for (int r = 0; r < kDim; ++r)
+#pragma GCC unroll 3
+    for (int c = 0; c < kDim; ++c) Lout.at(r, c)[li] = S.L[r][c] * inv_h;
+  if constexpr (WorkRate) {
+#pragma GCC unroll 3
+    for (int d = 0; d < kDim; ++d) Lout.work(d)[li] = S.W[d][d] * inv_h;
+    for (int k = kDim; k < sym_size(kDim); ++k) {
+      const int a = sym_row(kDim, k), b = sym_col(kDim, k);
+      Lout.work(k)[li] = 0.5 * (S.W[a][b] + S.W[b][a]) * inv_h;
+    }
+  }
+}
+
+// The node loop of g2p_particle: every sum its template arguments ask for, node by node in
+// storage order. u, uC: the point's old velocity and C h (the heating gather's scatter loss).
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip, bool WorkRate>
+SMPM_INLINE void gather_sums(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st, std::size_t foff,
+                             double mid, const double* u, const double (*uC)[kDim], GatherSums& S) {
+  constexpr int D = kDim;
+  constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
+  constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
+  st.for_each([&](const Idx<D>& a, int) {
+    const std::size_t n = g.node(node_of(st, a)) + foff;
+    const double w = st.weight(a);
+    double gv[D], lv[D];  // the node's velocity; the mid-step one of the work rate
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) {
+      gv[d] = PureFlip ? 0.0 : G.v[d][n];
+      lv[d] = gv[d];
+      // USL: the work rate from the mid-step velocity (v_old + v_new) / 2 of the node, v_old the
+      // scatter's velocity after the walls; FLIP: v_old = v_new - dv (the grid update's increment)
+      if constexpr (WorkRate && FLIP) lv[d] = gv[d] - mid * G.dv[d][n];
+      else if constexpr (WorkRate) lv[d] = gv[d] - mid * (gv[d] - G.p[d][n]);
+      if constexpr (!PureFlip) S.v[d] += w * gv[d];
+    }
+    if constexpr (Heat) {
+      double r[D], dn[D];
+#pragma GCC unroll 3
+      for (int d = 0; d < D; ++d) {
+        if constexpr (FLIP) {  // v_i^old = v_i - dv_i
+          dn[d] = G.dv[d][n];
+          r[d] = u[d] - gv[d] + dn[d];
+        } else {  // px, py hold the scatter's velocity p / m here
+          r[d] = u[d];
+#pragma GCC unroll 3
+          for (int c = 0; c < D; ++c) r[d] += uC[d][c] * st.offset(a, c);
+          r[d] -= G.p[d][n];
+        }
+      }
+      S.v2 += w * norm2(gv);
+      if constexpr (FLIP) S.d2 += w * norm2(dn);
+      S.r2 += w * norm2(r);
+      if constexpr (FLIP ? Contact != 0 : Contact == 2) S.qc += w * G.heat[n];  // FLIP: a weld's loss too
+    }
+    if constexpr (FLIP && What != G2PWhat::PositionGradient) {
+#pragma GCC unroll 3
+      for (int d = 0; d < D; ++d) S.dv[d] += w * G.dv[d][n];
+    }
+    if constexpr (kGrad) {
+      const Vec<D> gr = st.gradient(a);
+#pragma GCC unroll 3
+      for (int r = 0; r < D; ++r)
+#pragma GCC unroll 3
+        for (int c = 0; c < D; ++c) {
+          S.L[r][c] += gv[r] * gr[c];
+          if constexpr (WorkRate) S.W[r][c] += lv[r] * gr[c];
+        }
+    }
+    if constexpr (kAffine && !Shape::apic_gradient) {
+#pragma GCC unroll 3
+      for (int r = 0; r < D; ++r)
+#pragma GCC unroll 3
+        for (int c = 0; c < D; ++c) S.B[r][c] += w * gv[r] * st.offset(a, c);
+    }
+  });
+}
+
+// The affine field's kinetic energy per unit mass, sum_ab C_ab^2 D_b [grid units], C and the
+// inertia D per axis.
+SMPM_INLINE double affine_energy(const double (*C)[kDim], const double* Dn) {
+  double e = 0.0;
+#pragma GCC unroll 3
+  for (int c = 0; c < kDim; ++c) {
+    double s = C[0][c] * C[0][c];
+#pragma GCC unroll 3
+    for (int r = 1; r < kDim; ++r) s += C[r][c] * C[r][c];
+    e = c == 0 ? s * Dn[c] : e + s * Dn[c];
+  }
+  return e;
+}
+
+// 1/2 (a - sum_d v_d^2 - b): the least-squares residual of a gather, a = sum w |v_i|^2 (+ the
+// scatter loss), b the affine share.
+SMPM_INLINE double residual(double a, const double* v, double b) {
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) a -= v[d] * v[d];
+  return a - b;
+}
+
+// Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or
+// the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T
+// from the updated velocity. WorkRate (the USL pass with transfer heating, g2p_blocks): also
+// the rate of the energy's work, D_mid = sym sum_i v_i^mid grad w_i^T with v_i^mid = v_i^new -
+// q.mid (v_i^new - v_i^old) (p holds v^old, the grid update's scatter_velocity; FLIP takes
+// v^old = v^new - dv), into Lout's work rate. The grid's kinetic energy changes by exactly dt
+// f_i . (v^old + v^new) / 2 in the explicit update, and with q.mid = 0.5 the constitutive
+// update's work dt V sigma : D_mid with the stress that made f_i (kern::constitutive_range,
+// mid-step energy) is exactly its negative: the step conserves energy node by node, partly
+// filled nodes at void faces and free surfaces included (with the work over L from v^new it
+// loses dt^2 |f_i|^2 / (2 m_i) per node, most where m_i is small). The kinematics (volume,
+// deviator, viscosity) take L from v^new, the symplectic choice: with the mid-step rate there
+// too an undamped mode of frequency w grew by about (w dt)^2 / 4 per step in amplitude, and in
+// thin ligaments of a porous run the round-off grew without bound.
+//
+// Heat (APIC; FLIP with USL): the transfers' loss of kinetic energy (the point's kinetic energy
+// 1/2 m (|v_p|^2 + sum_ab C_ab^2 D_b)):
+//   scatter  1/2 sum_i w_ip |v_p + C_p (x_i - x_p) - v_i^old|^2    (v_i^old = p_i / m_i)
+//   gather   1/2 (sum_i w_ip |v_i|^2 - |v_p|^2 - sum_ab C_ab^2 D_b)  (least-squares residual)
+// both >= 0 [J/kg]. At a shock front this is numerical entropy production; Heat adds it to the
+// internal energy, so the transfers conserve total energy and the time integration's O(dt)
+// error is what remains. Contact: 0 one velocity field, 1 several (each particle reads its own,
+// Particles::field), 2 several with two-body contact, whose loss is added too: sum_i w_ip q_i,
+// q_i = the kinetic energy removed at node i per unit of its total mass (kern::grid_contact),
+// whose shares over the particles of both fields sum to the loss. (A weld of void faces needs
+// no such term: it gives both fields the merged scatter velocity, whose difference to each
+// field's own the scatter loss then counts.) Needs the scatter's velocity p / m in p (the grid
+// update's scatter_velocity, ghosts filled).
+//
+// PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
+// the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0, bool PureFlip = false,
           bool WorkRate = false>
 SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t p,
-                         const G2PParams& q, const Gradient& Lout, std::size_t li) {
+                              const G2PParams& q, const Gradient& Lout, std::size_t li) {
   static_assert(!PureFlip || (FLIP && What == G2PWhat::Velocity), "PureFlip is the FLIP velocity pass");
-  constexpr int N = Shape::N;
-  const double inv_h = 1.0 / g.h;
-  const double xg = (P.x[p] - g.x0) * inv_h, yg = (P.y[p] - g.y0) * inv_h;
-  double wx[N], wy[N], dwx[N], dwy[N];
-  const int bx = Shape::eval(xg, q.lp, wx, dwx);
-  const int by = Shape::eval(yg, q.lp, wy, dwy);
-  double vx = 0, vy = 0, dvx = 0, dvy = 0, lxx = 0, lxy = 0, lyx = 0, lyy = 0;
-  constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
-  constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
-  double bxx = 0, bxy = 0, byx = 0, byy = 0;  // B = sum w v (x_i - x_p)^T, grid units
-  // USL with transfer heating (g2p_blocks): also the rate of the energy's work, D_mid from the
-  // mid-step velocity (q.mid) into Lout.wxx...; L is from the updated velocity in every pass
   static_assert(!WorkRate || (What == G2PWhat::Full && Heat), "the work rate is the heating USL pass's");
-  double mxx = 0, mxy = 0, myx = 0, myy = 0;   // sum v_mid grad w^T
+  constexpr int D = kDim;
+  constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   static_assert(!Heat || kAffine || (FLIP && What == G2PWhat::Full),
                 "transfer heating is defined for the APIC velocity gather and the FLIP USL gather");
-  double v2 = 0, r2 = 0;  // sum w |v_i|^2, sum w |v_p + C_p (x_i - x_p) - v_i^old|^2
-  double d2 = 0;          // FLIP: sum w |dv_i|^2
-  double qc = 0;          // sum w q_i: the contact step's dissipation (several fields)
-  double ux = 0, uy = 0, uxx = 0, uxy = 0, uyx = 0, uyy = 0;  // old v_p and C_p h
+  const double inv_h = 1.0 / g.h;
+  const Stencil<Shape, D> st(grid_units(g, P, p, inv_h), q.lp);
+  double u[D] = {}, uC[D][D] = {};  // old v_p and C_p h
   if constexpr (Heat) {
-    ux = P.vx[p]; uy = P.vy[p];
-    if constexpr (!FLIP) {
-      uxx = P.Cxx[p] * g.h; uxy = P.Cxy[p] * g.h; uyx = P.Cyx[p] * g.h; uyy = P.Cyy[p] * g.h;
+#pragma GCC unroll 3
+    for (int r = 0; r < D; ++r) {
+      u[r] = P.vel(r)[p];
+      if constexpr (!FLIP)
+#pragma GCC unroll 3
+        for (int c = 0; c < D; ++c) uC[r][c] = P.affine(r, c)[p] * g.h;
     }
   }
   // with Contact the view always carries field_of (Simulation::pview): the lookup without
   // field()'s null test vectorizes
   const std::size_t foff = Contact ? static_cast<std::size_t>(P.field_of[p]) * G.fstride : 0;
-#pragma GCC unroll 4
-  for (int b = 0; b < N; ++b) {
-    const std::size_t row = g.node(bx, by + b) + foff;
-    const double dy = (by + b) - yg;
-#pragma GCC unroll 4
-    for (int a = 0; a < N; ++a) {
-      const std::size_t n = row + a;
-      const double w = wx[a] * wy[b];
-      const double gvx = PureFlip ? 0.0 : G.vx[n], gvy = PureFlip ? 0.0 : G.vy[n];
-      // USL: L from the mid-step velocity (v_old + v_new) / 2 of the node, v_old the scatter's
-      // velocity after the walls (see the comment above)
-      double lvx = gvx, lvy = gvy;
-      if constexpr (WorkRate && FLIP) {  // FLIP: v_old = v_new - dv (the grid update's increment)
-        lvx = gvx - q.mid * G.dvx[n];
-        lvy = gvy - q.mid * G.dvy[n];
-      } else if constexpr (WorkRate) {
-        lvx = gvx - q.mid * (gvx - G.px[n]);
-        lvy = gvy - q.mid * (gvy - G.py[n]);
-      }
-      if constexpr (!PureFlip) {
-        vx += w * gvx;
-        vy += w * gvy;
-      }
-      if constexpr (Heat && FLIP) {  // v_i^old = v_i - dv_i
-        v2 += w * (gvx * gvx + gvy * gvy);
-        d2 += w * (G.dvx[n] * G.dvx[n] + G.dvy[n] * G.dvy[n]);
-        const double rx = ux - gvx + G.dvx[n], ry = uy - gvy + G.dvy[n];
-        r2 += w * (rx * rx + ry * ry);
-        if constexpr (Contact != 0) qc += w * G.heat[n];  // the contact step's loss, a weld's too
-      } else if constexpr (Heat) {
-        v2 += w * (gvx * gvx + gvy * gvy);
-        const double dx = (bx + a) - xg;  // px, py hold the scatter's velocity p / m here
-        const double rx = ux + uxx * dx + uxy * dy - G.px[n];
-        const double ry = uy + uyx * dx + uyy * dy - G.py[n];
-        r2 += w * (rx * rx + ry * ry);
-        if constexpr (Contact == 2) qc += w * G.heat[n];
-      }
-      if constexpr (FLIP && What != G2PWhat::PositionGradient) {
-        dvx += w * G.dvx[n];
-        dvy += w * G.dvy[n];
-      }
-      if constexpr (kGrad) {
-        const double gx = dwx[a] * wy[b], gy = wx[a] * dwy[b];
-        lxx += gvx * gx; lxy += gvx * gy;
-        lyx += gvy * gx; lyy += gvy * gy;
-        if constexpr (WorkRate) {
-          mxx += lvx * gx; mxy += lvx * gy;
-          myx += lvy * gx; myy += lvy * gy;
-        }
-      }
-      if constexpr (kAffine && !Shape::apic_gradient) {
-        const double dx = (bx + a) - xg;
-        bxx += w * gvx * dx; bxy += w * gvx * dy;
-        byx += w * gvy * dx; byy += w * gvy * dy;
-      }
-    }
-  }
-  double affine = 0.0;  // sum_ab C_ab^2 D_b at the gather's position [m^2/s^2]
-  double cxx_ = 0, cxy_ = 0, cyx_ = 0, cyy_ = 0;  // C in grid units, for the affine energy after the move
+  GatherSums S;
+  gather_sums<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC, S);
+  double Dn[D] = {}, C[D][D] = {}, affine = 0.0;  // inertia, C (grid units), affine energy
   if constexpr (kAffine) {
-    // D = sum_i w_i (x_i - x_p)^2 per axis, grid units (diagonal for tensor-product shapes)
-    double Dx = 0, Dy = 0;
-    if constexpr (!Shape::apic_gradient || Heat) {
-#pragma GCC unroll 4
-      for (int a = 0; a < N; ++a) {
-        const double ex = (bx + a) - xg, ey = (by + a) - yg;
-        Dx += wx[a] * ex * ex;
-        Dy += wy[a] * ey * ey;
+    if constexpr (!Shape::apic_gradient || Heat)
+#pragma GCC unroll 3
+      for (int d = 0; d < D; ++d) Dn[d] = st.inertia(d);
+#pragma GCC unroll 3
+    for (int r = 0; r < D; ++r)
+#pragma GCC unroll 3
+      for (int c = 0; c < D; ++c) {
+        C[r][c] = Shape::apic_gradient ? S.L[r][c] : S.B[r][c] / Dn[c];
+        P.affine(r, c)[p] = C[r][c] * inv_h;
       }
-    }
-    double cxx, cxy, cyx, cyy;  // C in grid units
-    if constexpr (Shape::apic_gradient) {
-      cxx = lxx; cxy = lxy; cyx = lyx; cyy = lyy;
-    } else {
-      cxx = bxx / Dx; cxy = bxy / Dy; cyx = byx / Dx; cyy = byy / Dy;
-    }
-    P.Cxx[p] = cxx * inv_h; P.Cxy[p] = cxy * inv_h;
-    P.Cyx[p] = cyx * inv_h; P.Cyy[p] = cyy * inv_h;
-    cxx_ = cxx; cxy_ = cxy; cyx_ = cyx; cyy_ = cyy;
     if constexpr (Heat) {
-      affine = (cxx * cxx + cyx * cyx) * Dx + (cxy * cxy + cyy * cyy) * Dy;
-      P.e[p] += 0.5 * (r2 + v2 - vx * vx - vy * vy - affine) + qc;
+      affine = affine_energy(C, Dn);
+      P.e[p] += 0.5 * residual(S.r2 + S.v2, S.v, affine) + S.qc;
     }
   }
   if constexpr (Heat && FLIP) {
@@ -454,53 +622,35 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
     // its loss is alpha (FLIP's) + (1 - alpha) (PIC's) + alpha (1 - alpha) 1/2 |v_F - v_PIC|^2,
     // FLIP's 1/2 (sum w |dv_i|^2 - |sum w dv_i|^2) and PIC's the scatter and gather losses
     // above; each share >= 0 and their sum over the points exactly the transfers' loss
-    const double al = q.flip_alpha, fx = ux + dvx - vx, fy = uy + dvy - vy;
-    P.e[p] += 0.5 * (al * (d2 - dvx * dvx - dvy * dvy) + (1.0 - al) * (r2 + v2 - vx * vx - vy * vy) +
-                     al * (1.0 - al) * (fx * fx + fy * fy)) + qc;
+    const double al = q.flip_alpha;
+    double fd[D];
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) fd[d] = u[d] + S.dv[d] - S.v[d];
+    P.e[p] += 0.5 * (al * residual(S.d2, S.dv, 0.0) + (1.0 - al) * residual(S.r2 + S.v2, S.v, 0.0) +
+                     al * (1.0 - al) * norm2(fd)) + S.qc;
   }
   if constexpr (What != G2PWhat::PositionGradient) {
-    if constexpr (PureFlip) {
-      P.vx[p] = P.vx[p] + dvx;
-      P.vy[p] = P.vy[p] + dvy;
-    } else if constexpr (FLIP) {
-      P.vx[p] = q.flip_alpha * (P.vx[p] + dvx) + (1.0 - q.flip_alpha) * vx;
-      P.vy[p] = q.flip_alpha * (P.vy[p] + dvy) + (1.0 - q.flip_alpha) * vy;
-    } else {
-      P.vx[p] = vx;
-      P.vy[p] = vy;
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) {
+      double* v = P.vel(d);
+      if constexpr (PureFlip) v[p] = v[p] + S.dv[d];
+      else if constexpr (FLIP) v[p] = q.flip_alpha * (v[p] + S.dv[d]) + (1.0 - q.flip_alpha) * S.v[d];
+      else v[p] = S.v[d];
     }
   }
   if constexpr (What != G2PWhat::Velocity) {
-    // periodic x: wrap (the second test also catches x + L rounding up to x0 + L); selects,
-    // not branches, so the loop stays vectorizable (L = 0 leaves x as it is)
-    double x = P.x[p] + q.dt * vx;
-    const double L = g.periodic_x ? g.length_x() : 0.0;
-    x = x < g.x0 ? x + L : x;
-    x = x >= g.x0 + L ? x - L : x;
-    P.x[p] = std::min(std::max(x, q.xmin), q.xmax);
-    P.y[p] = std::min(std::max(P.y[p] + q.dt * vy, q.ymin), q.ymax);
+    move_point(g, P, p, q, S.v);
     if constexpr (Heat && !FLIP && !Shape::constant_D && What == G2PWhat::Full) {
       // D of the linear hat and uGIMP depends on where the point sits in its cell. The affine
       // kinetic energy the next scatter sees (and Simulation::energy counts) is the one at the
       // new position: the difference is heat of the move, so total energy still balances
-      double ex[N], ey[N], dex[N], dey[N], Dx = 0, Dy = 0;
-      const double xn = (P.x[p] - g.x0) * inv_h, yn = (P.y[p] - g.y0) * inv_h;
-      const int cx = Shape::eval(xn, q.lp, ex, dex), cy = Shape::eval(yn, q.lp, ey, dey);
-#pragma GCC unroll 4
-      for (int a = 0; a < N; ++a) {
-        const double ux = (cx + a) - xn, uy = (cy + a) - yn;
-        Dx += ex[a] * ux * ux;
-        Dy += ey[a] * uy * uy;
-      }
-      const double after = (cxx_ * cxx_ + cyx_ * cyx_) * Dx + (cxy_ * cxy_ + cyy_ * cyy_) * Dy;
-      P.e[p] += 0.5 * (affine - after);
+      const Stencil<Shape, D> moved(grid_units(g, P, p, inv_h), q.lp);
+      double Dm[D];
+#pragma GCC unroll 3
+      for (int d = 0; d < D; ++d) Dm[d] = moved.inertia(d);
+      P.e[p] += 0.5 * (affine - affine_energy(C, Dm));
     }
-    Lout.xx[li] = lxx * inv_h; Lout.xy[li] = lxy * inv_h;
-    Lout.yx[li] = lyx * inv_h; Lout.yy[li] = lyy * inv_h;
-    if constexpr (WorkRate) {
-      Lout.wxx[li] = mxx * inv_h; Lout.wyy[li] = myy * inv_h;
-      Lout.wxy[li] = 0.5 * (mxy + myx) * inv_h;
-    }
+    store_gradient<WorkRate>(S, inv_h, Lout, li);
   }
 }
 
@@ -554,7 +704,7 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 // restarts the prefetch streams of both loops, about 20 arrays); 4096-16384 measured alike
 // (docs/performance.md).
 inline constexpr std::size_t kGatherBlock = 8192;
-inline constexpr std::size_t kGatherScratch = 7 * kGatherBlock;  // doubles per thread
+inline constexpr std::size_t kGatherScratch = (kDim * kDim + sym_size(kDim)) * kGatherBlock;  // doubles per thread
 
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Acc, class After>
 Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
@@ -576,13 +726,12 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
     Acc own{};
     for (std::size_t first = begin; first < end; first += kGatherBlock) {
       const std::size_t last = std::min(first + kGatherBlock, end);
-      Gradient L = store_L ? Gradient::of(Pl) + first
-                           : Gradient{buf, buf + kGatherBlock, buf + 2 * kGatherBlock, buf + 3 * kGatherBlock};
-      if constexpr (kWork) {
-        L.wxx = buf + 4 * kGatherBlock;
-        L.wyy = buf + 5 * kGatherBlock;
-        L.wxy = buf + 6 * kGatherBlock;
-      }
+      Gradient L = Gradient::of(Pl) + first;
+      if (!store_L)
+        for (int r = 0; r < kDim; ++r)
+          for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
+      if constexpr (kWork)
+        for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
 #pragma omp simd
       for (std::size_t p = first; p < last; ++p)
         g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);

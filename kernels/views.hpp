@@ -13,14 +13,41 @@
 
 namespace smpm::kern {
 
-// A rectangle of nodes, i in [i0, i1], j in [j0, j1] (inclusive; ghosts included, so
-// -pad <= i0 and i1 <= nx + pad, the same for j). The grid passes of a step work on the box its
+// A box of nodes, lo[d] <= i_d <= hi[d] along every axis d (inclusive; ghosts included, so
+// -pad <= lo[d] and hi[d] <= n_d + pad). The grid passes of a step work on the box its
 // particles occupy (occupied_nodes, kernels/transfer.hpp): a scene that fills a third of its grid
-// (the elastic block) pays for a third of the grid traffic. Empty when i1 < i0 or j1 < j0.
+// (the elastic block) pays for a third of the grid traffic. Empty when hi[d] < lo[d] on an axis.
 struct NodeBox {
-  int i0 = 0, i1 = -1, j0 = 0, j1 = -1;
-  bool empty() const { return i1 < i0 || j1 < j0; }
-  std::size_t nodes() const { return empty() ? 0 : std::size_t(i1 - i0 + 1) * std::size_t(j1 - j0 + 1); }
+  int lo[kDim] = {}, hi[kDim] = {-1};
+  bool empty() const {
+    for (int d = 0; d < kDim; ++d)
+      if (hi[d] < lo[d]) return true;
+    return false;
+  }
+  std::size_t nodes() const {
+    if (empty()) return 0;
+    std::size_t k = 1;
+    for (int d = 0; d < kDim; ++d) k *= std::size_t(hi[d] - lo[d] + 1);
+    return k;
+  }
+  // Lines of nodes along x (axis 0) in the box, and the first node of line r: lines are
+  // numbered with axis 1 fastest, then axis 2.
+  int lines() const {
+    if (empty()) return 0;
+    int k = 1;
+    for (int d = 1; d < kDim; ++d) k *= hi[d] - lo[d] + 1;
+    return k;
+  }
+  Idx<kDim> line_start(int r) const {
+    Idx<kDim> i;
+    i[0] = lo[0];
+    for (int d = 1; d < kDim; ++d) {
+      const int len = hi[d] - lo[d] + 1;
+      i[d] = lo[d] + r % len;
+      r /= len;
+    }
+    return i;
+  }
 };
 
 // Uniform 2D grid of cells of size h. Nodes (i, j), i in [0, nx], j in [0, ny], sit at
@@ -34,56 +61,104 @@ struct GridGeom {
   int tile = 16;        // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
   bool periodic_x = false;
 
-  int sx() const { return nx + 1 + 2 * pad; }  // storage row length
-  int sy() const { return ny + 1 + 2 * pad; }
-  std::size_t num_nodes() const { return static_cast<std::size_t>(sx()) * sy(); }
-  // storage index of node (i, j); i, j may be negative down to -pad
-  std::size_t node(int i, int j) const {
-    return static_cast<std::size_t>(j + pad) * sx() + static_cast<std::size_t>(i + pad);
+  // per axis: cells, origin [m], periodicity, storage length (nodes with ghosts), storage stride
+  int cells(int d) const { return d == 0 ? nx : ny; }
+  double origin(int d) const { return d == 0 ? x0 : y0; }
+  bool periodic(int d) const { return d == 0 && periodic_x; }
+  int size(int d) const { return cells(d) + 1 + 2 * pad; }
+  std::size_t stride(int d) const {
+    std::size_t s = 1;
+    for (int e = 0; e < d; ++e) s *= static_cast<std::size_t>(size(e));
+    return s;
   }
-  int tiles_x() const { return (nx + tile - 1) / tile; }
-  int tiles_y() const { return (ny + tile - 1) / tile; }
-  int num_tiles() const { return tiles_x() * tiles_y(); }
-  // cell keys are tile-major: all cells of tile 0 (row by row), then tile 1, ...
-  int cells_per_tile() const { return tile * tile; }
+  int sx() const { return size(0); }  // storage row length
+  int sy() const { return size(1); }
+  std::size_t num_nodes() const { return stride(kDim); }
+  // storage lines along x (axis 0): num_nodes() / sx()
+  int num_lines() const { return static_cast<int>(num_nodes() / static_cast<std::size_t>(size(0))); }
+  // storage index of node i (components down to -pad), and of the line along x it lies on
+  std::size_t node(const Idx<kDim>& i) const {
+    std::size_t k = 0;
+    for (int d = kDim - 1; d >= 0; --d) k = k * static_cast<std::size_t>(size(d)) + static_cast<std::size_t>(i[d] + pad);
+    return k;
+  }
+  std::size_t node(int i, int j) const { return node(Idx<kDim>{{i, j}}); }
+  int line(const Idx<kDim>& i) const { return static_cast<int>(node(i) / static_cast<std::size_t>(size(0))); }
+  // the nodes that carry state along axis d: 0 .. n_d - 1 when periodic (ghosts are copies),
+  // -pad .. n_d + pad otherwise
+  int first_real(int d) const { return periodic(d) ? 0 : -pad; }
+  int last_real(int d) const { return periodic(d) ? cells(d) - 1 : cells(d) + pad; }
+  // tiles along axis d, tiles in all (numbered with x fastest)
+  int tiles(int d) const { return (cells(d) + tile - 1) / tile; }
+  int num_tiles() const {
+    int k = 1;
+    for (int d = 0; d < kDim; ++d) k *= tiles(d);
+    return k;
+  }
+  // cell keys are tile-major: all cells of tile 0 (x fastest), then tile 1, ...
+  int cells_per_tile() const {
+    int k = 1;
+    for (int d = 0; d < kDim; ++d) k *= tile;
+    return k;
+  }
   std::size_t num_keys() const { return static_cast<std::size_t>(num_tiles()) * cells_per_tile(); }
   double length_x() const { return nx * h; }
   double length_y() const { return ny * h; }
-  NodeBox all_nodes() const { return NodeBox{-pad, nx + pad, -pad, ny + pad}; }
+  NodeBox all_nodes() const {
+    NodeBox b;
+    for (int d = 0; d < kDim; ++d) {
+      b.lo[d] = -pad;
+      b.hi[d] = cells(d) + pad;
+    }
+    return b;
+  }
 };
 
 
 // With multi-body contact every array holds one block of num_nodes() values per velocity field
-// (field f of node n at n + f * fstride); fstride is 0 with a single field.
+// (field f of node n at n + f * fstride); fstride is 0 with a single field. Vector quantities
+// are one array per axis.
 struct GridView {
-  double* m;            // mass [kg/m]
-  double* px; double* py;  // momentum
-  double* fx; double* fy;  // force [N/m]
-  double* vx; double* vy;  // updated velocity (after forces and boundary conditions)
-  double* dvx; double* dvy;  // v_new - v_old, for FLIP (may be null when unused)
+  double* m;              // mass [kg/m]
+  double* p[kDim];        // momentum [kg m/s per m]; after the grid update with scatter_velocity, p / m
+  double* f[kDim];        // force [N/m]
+  double* v[kDim];        // updated velocity (after forces and boundary conditions) [m/s]
+  double* dv[kDim];       // v_new - v_old, for FLIP (null when unused)
   // several fields only (null otherwise): mass gradient sum_p m_p grad w_ip [kg/m^2], volume
   // sum w V [m^2], and the kinetic energy the contact step dissipated at the node per unit of
   // the node's total mass [J/kg] (the same value in every field's slot), which the heating
   // gather hands to the particles (kern::grid_contact, kern::g2p_particle)
-  double* gmx = nullptr; double* gmy = nullptr; double* vol = nullptr; double* heat = nullptr;
+  double* gm[kDim] = {};
+  double* vol = nullptr;
+  double* heat = nullptr;
   std::size_t fstride = 0;  // num_nodes() with several fields, 0 with one
   int fields = 1;
   // The view of field f alone (a one-field view into the same storage).
-  GridView field(int f) const {
-    GridView v = *this;
-    const std::size_t o = static_cast<std::size_t>(f) * fstride;
-    for (double** a : {&v.m, &v.px, &v.py, &v.fx, &v.fy, &v.vx, &v.vy, &v.dvx, &v.dvy, &v.gmx, &v.gmy, &v.vol, &v.heat})
-      if (*a) *a += o;
-    v.fstride = 0;
-    v.fields = 1;
-    return v;
+  GridView field(int fi) const {
+    GridView w = *this;
+    const std::size_t o = static_cast<std::size_t>(fi) * fstride;
+    const auto shift = [o](double*& a) {
+      if (a) a += o;
+    };
+    shift(w.m);
+    shift(w.vol);
+    shift(w.heat);
+    for (int d = 0; d < kDim; ++d)
+      for (double** a : {&w.p[d], &w.f[d], &w.v[d], &w.dv[d], &w.gm[d]}) shift(*a);
+    w.fstride = 0;
+    w.fields = 1;
+    return w;
   }
 };
 
-// Column range of the box's nodes that carry state: periodic x keeps 0..nx-1 (ghosts are copies).
-inline void real_columns(const GridGeom& g, const NodeBox& b, int& i0, int& i1) {
-  i0 = std::max(b.i0, g.periodic_x ? 0 : -g.pad);
-  i1 = std::min(b.i1, g.periodic_x ? g.nx - 1 : g.nx + g.pad);
+// The box clipped to the nodes that carry state (GridGeom::first_real, last_real) on every axis.
+inline NodeBox real_nodes(const GridGeom& g, const NodeBox& b) {
+  NodeBox r = b;
+  for (int d = 0; d < kDim; ++d) {
+    r.lo[d] = std::max(b.lo[d], g.first_real(d));
+    r.hi[d] = std::min(b.hi[d], g.last_real(d));
+  }
+  return r;
 }
 
 // Particle fields the transfer kernels read or write. Plane strain: stress is the deviator
@@ -106,6 +181,13 @@ struct ParticleView {
   // particle, Particles::field (null: one field).
   const std::uint8_t* field_of = nullptr;
   std::size_t field(std::size_t p) const { return field_of ? field_of[p] : 0; }
+  // Component arrays by axis: position and velocity (d), velocity gradient and affine matrix
+  // (row r, column c), stress deviator (symmetric component k, kernels/tensor.hpp's order).
+  SMPM_INLINE double* pos(int d) const { return d == 0 ? x : y; }
+  SMPM_INLINE double* vel(int d) const { return d == 0 ? vx : vy; }
+  SMPM_INLINE double* grad(int r, int c) const { return r == 0 ? (c == 0 ? Lxx : Lxy) : (c == 0 ? Lyx : Lyy); }
+  SMPM_INLINE double* affine(int r, int c) const { return r == 0 ? (c == 0 ? Cxx : Cxy) : (c == 0 ? Cyx : Cyy); }
+  SMPM_INLINE double* dev(int k) const { return k == 0 ? sxx : k == 1 ? syy : sxy; }
 };
 
 // The calling thread's share [begin, end) of n items in an omp parallel region: contiguous
@@ -129,6 +211,11 @@ struct Gradient {
   double* xx; double* xy; double* yx; double* yy;
   double* wxx = nullptr; double* wyy = nullptr; double* wxy = nullptr;
   static Gradient of(const ParticleView& P) { return {P.Lxx, P.Lxy, P.Lyx, P.Lyy}; }
+  SMPM_INLINE double*& at(int r, int c) { return r == 0 ? (c == 0 ? xx : xy) : (c == 0 ? yx : yy); }
+  SMPM_INLINE double* at(int r, int c) const { return r == 0 ? (c == 0 ? xx : xy) : (c == 0 ? yx : yy); }
+  // the mid-step rate's symmetric component k (kernels/tensor.hpp's order)
+  SMPM_INLINE double*& work(int k) { return k == 0 ? wxx : k == 1 ? wyy : wxy; }
+  SMPM_INLINE double* work(int k) const { return k == 0 ? wxx : k == 1 ? wyy : wxy; }
   Gradient operator+(std::size_t k) const {
     const auto off = [k](double* a) { return a ? a + k : nullptr; };
     return {xx + k, xy + k, yx + k, yy + k, off(wxx), off(wyy), off(wxy)};

@@ -35,6 +35,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "stencil.hpp"
 #include "views.hpp"
 
 namespace smpm::kern {
@@ -57,19 +58,21 @@ struct MergeParams {
 // own from the grid: race-free and the same for any thread count.
 // Returns the number of points merged.
 template <class Shape>
-std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const GridView& G, const double* x,
-                               const double* y, std::uint8_t* field, std::size_t n, const MergeParams& q,
-                               std::uint8_t* node_state) {
+std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const GridView& G, const double* const* x,
+                               std::uint8_t* field, std::size_t n, const MergeParams& q, std::uint8_t* node_state) {
   const std::size_t fs = G.fstride;
-  const double full = q.fill * g.h * g.h;
-  int i0, i1;
-  real_columns(g, box, i0, i1);
-  constexpr int kChunk = 64;  // nodes of a row at a time, fields outer: the sums vectorize
+  double full = q.fill;  // a full node's volume, fill h^kDim
+  for (int d = 0; d < kDim; ++d) full *= g.h;
+  const NodeBox b = real_nodes(g, box);
+  const int lines = b.lines();
+  constexpr int kChunk = 64;  // nodes of a line at a time, fields outer: the sums vectorize
 #pragma omp parallel for schedule(static)
-  for (int j = box.j0; j <= box.j1; ++j) {
-    for (int c0 = i0; c0 <= i1; c0 += kChunk) {
-      const int len = std::min(kChunk, i1 - c0 + 1);
-      const std::size_t k0 = g.node(c0, j);
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    for (int c0 = b.lo[0]; c0 <= b.hi[0]; c0 += kChunk) {
+      const int len = std::min(kChunk, b.hi[0] - c0 + 1);
+      i[0] = c0;
+      const std::size_t k0 = g.node(i);
       double V[kChunk];
       int present[kChunk];
       for (int c = 0; c < len; ++c) V[c] = 0.0, present[c] = 0;
@@ -91,21 +94,22 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
 #pragma omp parallel for schedule(static) reduction(+ : merged)
   for (long p = 0; p < cnt; ++p) {
     if (field[p] == 0) continue;
-    double wx[Shape::N], dwx[Shape::N], wy[Shape::N], dwy[Shape::N];
-    const int bx = Shape::eval((x[p] - g.x0) / g.h, q.lp, wx, dwx);
-    const int by = Shape::eval((y[p] - g.y0) / g.h, q.lp, wy, dwy);
+    Vec<kDim> xg;
+    for (int d = 0; d < kDim; ++d) xg[d] = (x[d][p] - g.origin(d)) / g.h;
+    const Stencil<Shape, kDim> st(xg, q.lp);
     unsigned all = 1u, any = 0u;  // bit 0 of every node's state, bit 1 of any
-    for (int b = 0; b < Shape::N; ++b) {
-      if (wy[b] == 0.0) continue;
-      for (int a = 0; a < Shape::N; ++a) {
-        if (wx[a] == 0.0) continue;
-        int i = bx + a;
-        if (g.periodic_x) i = i < 0 ? i + g.nx : i >= g.nx ? i - g.nx : i;  // the scatter folded the ghosts onto these
-        const unsigned st = node_state[g.node(i, by + b)];
-        all &= st;
-        any |= st;
+    st.for_each([&](const Idx<kDim>& a, int) {
+      Idx<kDim> i;
+      for (int d = 0; d < kDim; ++d) {
+        if (st.w[d][a[d]] == 0.0) return;  // a node outside the support
+        i[d] = st.base[d] + a[d];
+        // the scatter folded the ghosts onto these
+        if (g.periodic(d)) i[d] = i[d] < 0 ? i[d] + g.cells(d) : i[d] >= g.cells(d) ? i[d] - g.cells(d) : i[d];
       }
-    }
+      const unsigned s = node_state[g.node(i)];
+      all &= s;
+      any |= s;
+    });
     if (all & (any >> 1) & 1u) {
       field[p] = 0;
       ++merged;

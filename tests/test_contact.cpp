@@ -28,9 +28,9 @@ double slope_acceleration(double theta_deg, double mu) {
   cfg.friction = mu;
   cfg.cfl = 0.3;
   const double th = theta_deg * M_PI / 180.0, grav = 9.81;
-  cfg.gravity_x = grav * std::sin(th);
-  cfg.gravity_y = -grav * std::cos(th);
-  cfg.walls.bottom = kern::Wall::NoSlip;
+  cfg.gravity[0] = grav * std::sin(th);
+  cfg.gravity[1] = -grav * std::cos(th);
+  cfg.walls.lo[1] = kern::Wall::NoSlip;
   Material m;
   m.name = "stiff";
   m.rho0 = 1000.0;

@@ -42,8 +42,8 @@ BarResult bar(kern::ShapeKind shape, double h, Scheme scheme, Transfer transfer)
   cfg.transfer = transfer;
   cfg.flip_alpha = 1.0;
   cfg.cfl = 0.2;
-  cfg.walls.left = kern::Wall::Slip;
-  cfg.walls.bottom = cfg.walls.top = kern::Wall::Slip;
+  cfg.walls.lo[0] = kern::Wall::Slip;
+  cfg.walls.lo[1] = cfg.walls.hi[1] = kern::Wall::Slip;
   Particles P = fill_rectangle(g, 2, 0.0, L, 0.0, h, 1.0, 0.0, 0.0, 0);
   for (std::size_t i = 0; i < P.size(); ++i) P.vx[i] = 0.1 * std::sin(M_PI * P.x[i] / (2 * L));
   Simulation sim(g, cfg, {elastic(1.0, 100.0, 0.0)}, {0}, P);
@@ -187,7 +187,7 @@ TEST_CASE("determinism: bitwise-identical particle arrays with 1 and 2 threads",
       cfg.transfer = transfer;
       cfg.scheme = scheme;
       cfg.permute_every = 7;
-      cfg.walls.bottom = kern::Wall::Slip;
+      cfg.walls.lo[1] = kern::Wall::Slip;
       std::vector<Particles> out;
       for (int threads : {1, 2}) {
         omp_set_num_threads(threads);

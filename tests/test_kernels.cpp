@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 
@@ -18,6 +19,21 @@ using namespace smpm;
 using namespace smpm::kern;
 
 namespace {
+
+// the position arrays of compute_keys
+std::array<const double*, kDim> xy(const double* x, const double* y) { return {x, y}; }
+
+// Component d of a named grid array (d = 0 for a scalar one).
+std::vector<double>& component(Grid& G, NodeArray a, int d) {
+  switch (a) {
+    case NodeArray::Momentum: return G.p[d];
+    case NodeArray::Force: return G.f[d];
+    case NodeArray::Velocity: return G.v[d];
+    case NodeArray::VelocityChange: return G.dv[d];
+    case NodeArray::Volume: return G.vol;
+    default: return G.m;
+  }
+}
 
 GridGeom make_geom(bool periodic) {
   GridGeom g;
@@ -78,7 +94,7 @@ Bins bin(const GridGeom& g, const Particles& P) {
   b.order.resize(n);
   b.start.resize(g.num_keys() + 1);
   b.hist.resize(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
-  REQUIRE(compute_keys(g, P.x.data(), P.y.data(), n, b.key.data()) == -1);
+  REQUIRE(compute_keys(g, xy(P.x.data(), P.y.data()).data(), n, b.key.data()) == -1);
   counting_sort(b.key.data(), n, g.num_keys(), b.hist.data(), b.start.data(), b.order.data());
   return b;
 }
@@ -129,8 +145,8 @@ void check_sort(const GridGeom& g, const Particles& P) {
     const double inv_h = 1.0 / g.h;
     const int cx = static_cast<int>((P.x[i] - g.x0) * inv_h), cy = static_cast<int>((P.y[i] - g.y0) * inv_h);
     const int t = b1.key[i] / g.cells_per_tile(), l = b1.key[i] % g.cells_per_tile();
-    REQUIRE((t % g.tiles_x()) * g.tile + l % g.tile == cx);
-    REQUIRE((t / g.tiles_x()) * g.tile + l / g.tile == cy);
+    REQUIRE((t % g.tiles(0)) * g.tile + l % g.tile == cx);
+    REQUIRE((t / g.tiles(0)) * g.tile + l / g.tile == cy);
   }
 }
 
@@ -179,14 +195,14 @@ TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any t
       }
     }
     std::vector<std::uint32_t> key(x.size());
-    const std::ptrdiff_t first = compute_keys(g, x.data(), y.data(), x.size(), key.data());
+    const std::ptrdiff_t first = compute_keys(g, xy(x.data(), y.data()).data(), x.size(), key.data());
     // only the point just below x0 is outside
     REQUIRE(first == 0);
     for (std::size_t i = 1; i < x.size(); ++i) {
       const int cx = static_cast<int>(std::floor((x[i] - g.x0) * inv_h));
       const int cy = static_cast<int>(std::floor((y[i] - g.y0) * inv_h));
       const int tx = cx / tile, ty = cy / tile;
-      const auto expect = static_cast<std::uint32_t>((ty * g.tiles_x() + tx) * g.cells_per_tile() +
+      const auto expect = static_cast<std::uint32_t>((ty * g.tiles(0) + tx) * g.cells_per_tile() +
                                                      (cy - ty * tile) * tile + (cx - tx * tile));
       INFO("tile " << tile << ", point " << i << ", x = " << x[i] << ", cell " << cx << ", " << cy);
       REQUIRE(key[i] == expect);
@@ -200,7 +216,7 @@ TEST_CASE("sort: a particle outside the grid is reported", "[sort]") {
   P.y[42] = g.y0 - 1e-9;
   P.x[77] = std::nan("");
   std::vector<std::uint32_t> key(P.size());
-  REQUIRE(compute_keys(g, P.x.data(), P.y.data(), P.size(), key.data()) == 42);
+  REQUIRE(compute_keys(g, xy(P.x.data(), P.y.data()).data(), P.size(), key.data()) == 42);
 }
 
 namespace {
@@ -215,7 +231,7 @@ void check_conservation(bool periodic) {
   Bins b = bin(g, P);
   clear_grid(g, g.all_nodes(), G, true);
   p2g_colored<S, true, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
-  double* arrays[] = {G.m, G.px, G.py, G.fx, G.fy};
+  double* arrays[] = {G.m, G.p[0], G.p[1], G.f[0], G.f[1]};
   fold_periodic(g, g.all_nodes(), arrays, 5);
 
   // particle totals; APIC angular momentum x_p x m v_p + m (C_yx D_xx - C_xy D_yy),
@@ -244,11 +260,11 @@ void check_conservation(bool periodic) {
     for (int i = i0; i <= i1; ++i) {
       const auto n = g.node(i, j);
       gm += G.m[n];
-      gpx += G.px[n];
-      gpy += G.py[n];
-      Fx += G.fx[n];
-      Fy += G.fy[n];
-      gL += (g.x0 + i * g.h) * G.py[n] - (g.y0 + j * g.h) * G.px[n];
+      gpx += G.p[0][n];
+      gpy += G.p[1][n];
+      Fx += G.f[0][n];
+      Fy += G.f[1][n];
+      gL += (g.x0 + i * g.h) * G.p[1][n] - (g.y0 + j * g.h) * G.p[0][n];
     }
   CHECK(gm == Approx(M).epsilon(1e-13));
   CHECK(gpx == Approx(Px).epsilon(1e-12).margin(1e-10));
@@ -261,7 +277,7 @@ void check_conservation(bool periodic) {
   GridUpdateParams q;
   q.dt = 0.0;
   grid_update(g, g.all_nodes(), G, q, nullptr);
-  double* vel[] = {G.vx, G.vy};
+  double* vel[] = {G.v[0], G.v[1]};
   fill_periodic_ghosts(g, g.all_nodes(), vel, 2);
   g2p<S, false, G2PWhat::Full>(g, G, pv, P.size(), G2PParams{0.0, 0.25, 0.0});
   double Px2 = 0, Py2 = 0, Lz2 = 0;
@@ -308,10 +324,11 @@ void check_colored_vs_serial(bool apic) {
     p2g_atomic<S, false, P2GWhat::All>(g, T, pv, b.order.data(), P.size(), 0.25);
   }
   double worst = 0;
-  for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::fx, &Grid::fy}) {
-    const auto& x = a.*arr;
-    const auto& y = s.*arr;
-    const auto& z = t.*arr;
+  for (auto arr : {NodeArray::Mass, NodeArray::Momentum, NodeArray::Force})
+  for (int d = 0; d < (arr == NodeArray::Mass ? 1 : kDim); ++d) {
+    const auto& x = component(a, arr, d);
+    const auto& y = component(s, arr, d);
+    const auto& z = component(t, arr, d);
     double scale = 0;
     for (double v : y) scale = std::max(scale, std::fabs(v));
     for (std::size_t n = 0; n < x.size(); ++n) {
@@ -348,7 +365,7 @@ TEST_CASE("colored scatter into four velocity fields matches a serial scatter, a
       pv.field_of = P.field.data();
       const Bins b = bin(g, P);
       Grid a(g, false, 4, false), s(g, false, 4, false);
-      REQUIRE(a.gmx.empty());
+      REQUIRE(a.gm[0].empty());
       auto A = a.view(), S = s.view();
       clear_grid(g, g.all_nodes(), A, true);
       clear_grid(g, g.all_nodes(), S, true);
@@ -356,9 +373,10 @@ TEST_CASE("colored scatter into four velocity fields matches a serial scatter, a
       p2g_range<QuadraticBSpline, true, P2GWhat::All, GridSink<PlainAdd>, true, false>(
           g, GridSink<PlainAdd>{g, S}, pv, b.order.data(), 0, P.size(), 0.25);
       double worst = 0;
-      for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::fx, &Grid::fy, &Grid::vol}) {
-        const auto& x = a.*arr;
-        const auto& y = s.*arr;
+      for (auto arr : {NodeArray::Mass, NodeArray::Momentum, NodeArray::Force, NodeArray::Volume})
+      for (int d = 0; d < (arr == NodeArray::Momentum || arr == NodeArray::Force ? kDim : 1); ++d) {
+        const auto& x = component(a, arr, d);
+        const auto& y = component(s, arr, d);
         double scale = 0;
         for (double v : y) scale = std::max(scale, std::fabs(v));
         for (std::size_t n = 0; n < x.size(); ++n) worst = std::max(worst, std::fabs(x[n] - y[n]) / scale);
@@ -368,7 +386,7 @@ TEST_CASE("colored scatter into four velocity fields matches a serial scatter, a
         const std::size_t nn = g.num_nodes();
         bool empty = true;
         for (int f : {1, 3})
-          for (std::size_t n = 0; n < nn; ++n) empty &= a.m[n + f * nn] == 0.0 && a.px[n + f * nn] == 0.0 && a.vol[n + f * nn] == 0.0;
+          for (std::size_t n = 0; n < nn; ++n) empty &= a.m[n + f * nn] == 0.0 && a.p[0][n + f * nn] == 0.0 && a.vol[n + f * nn] == 0.0;
         CHECK(empty);
       }
     }
@@ -392,8 +410,8 @@ TEST_CASE("colored scatter is bitwise identical for 1 and 2 threads", "[transfer
   p2g_colored<QuadraticBSpline, true, P2GWhat::All>(g, C, pv, b.order.data(), b.start.data(), 0.25);
   omp_set_num_threads(threads0);
   REQUIRE(a.m == c.m);
-  REQUIRE(a.px == c.px);
-  REQUIRE(a.fy == c.fy);
+  REQUIRE(a.p[0] == c.p[0]);
+  REQUIRE(a.f[1] == c.f[1]);
 }
 
 namespace {
@@ -423,19 +441,19 @@ void check_occupied_box(bool periodic) {
   Bins b = bin(g, P);
   const NodeBox box = occupied_nodes(g, b.start.data());
   // the box is the occupied tiles' node blocks, not the grid
-  REQUIRE(box.j0 == 8 - 1);
-  REQUIRE(box.j1 == 31 + 2);
+  REQUIRE(box.lo[1] == 8 - 1);
+  REQUIRE(box.hi[1] == 31 + 2);
   if (periodic) {
-    REQUIRE(box.i0 == -g.pad);
-    REQUIRE(box.i1 == g.nx + g.pad);
+    REQUIRE(box.lo[0] == -g.pad);
+    REQUIRE(box.hi[0] == g.nx + g.pad);
   } else {
-    REQUIRE(box.i0 == 16 - 1);
-    REQUIRE(box.i1 == 47 + 2);
+    REQUIRE(box.lo[0] == 16 - 1);
+    REQUIRE(box.hi[0] == 47 + 2);
   }
   GridUpdateParams q;
   q.dt = 1e-4;
-  q.gravity_y = -9.81;
-  q.walls = Walls{Wall::Slip, Wall::Slip, Wall::Slip, Wall::Slip};
+  q.gravity[1] = -9.81;
+  q.walls = Walls{{Wall::Slip, Wall::Slip}, {Wall::Slip, Wall::Slip}};
   q.flip = true;
   const G2PParams gq{q.dt, 0.25, 0.95};
   auto transfer = [&](Grid& grid, const NodeBox& nb, Particles& Q, bool musl, std::vector<double>& rf) {
@@ -443,10 +461,10 @@ void check_occupied_box(bool periodic) {
     auto pv = Q.view();
     clear_grid(g, nb, G, true);
     p2g_colored<S, false, P2GWhat::All>(g, G, pv, b.order.data(), b.start.data(), 0.25);
-    double* sums[] = {G.m, G.px, G.py, G.fx, G.fy};
+    double* sums[] = {G.m, G.p[0], G.p[1], G.f[0], G.f[1]};
     fold_periodic(g, nb, sums, 5);
     grid_update(g, nb, G, q, rf.data());
-    double* vel[] = {G.vx, G.vy, G.dvx, G.dvy};
+    double* vel[] = {G.v[0], G.v[1], G.dv[0], G.dv[1]};
     fill_periodic_ghosts(g, nb, vel, 4);
     if (!musl) {
       g2p<S, true, G2PWhat::Full>(g, G, pv, Q.size(), gq);
@@ -464,9 +482,12 @@ void check_occupied_box(bool periodic) {
     INFO("musl " << musl);
     Particles PA = P, PB = P;
     Grid a(g, true), c(g, true);
-    for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::fx, &Grid::fy, &Grid::vx, &Grid::vy, &Grid::dvx, &Grid::dvy})
-      std::fill((c.*arr).begin(), (c.*arr).end(), std::nan(""));
-    std::vector<double> rfa(kRowSlots * static_cast<std::size_t>(g.sy()), 1.0), rfb = rfa;
+    for (auto arr : {NodeArray::Mass, NodeArray::Momentum, NodeArray::Force, NodeArray::Velocity, NodeArray::VelocityChange})
+      for (int d = 0; d < (arr == NodeArray::Mass ? 1 : kDim); ++d) {
+        auto& v = component(c, arr, d);
+        std::fill(v.begin(), v.end(), std::nan(""));
+      }
+    std::vector<double> rfa(kRowSlots * static_cast<std::size_t>(g.num_lines()), 1.0), rfb = rfa;
     transfer(a, g.all_nodes(), PA, musl, rfa);
     transfer(c, box, PB, musl, rfb);
     for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::Lxx, &Particles::Lxy,
@@ -478,12 +499,13 @@ void check_occupied_box(bool periodic) {
     for (int j = -g.pad; j <= g.ny + g.pad; ++j)
       for (int i = -g.pad; i <= g.nx + g.pad; ++i) {
         const auto n = g.node(i, j);
-        const bool in = i >= box.i0 && i <= box.i1 && j >= box.j0 && j <= box.j1;
+        const bool in = i >= box.lo[0] && i <= box.hi[0] && j >= box.lo[1] && j <= box.hi[1];
         outside += !in;
-        for (auto arr : {&Grid::m, &Grid::px, &Grid::py, &Grid::vx, &Grid::vy}) {
-          if (in) REQUIRE((a.*arr)[n] == (c.*arr)[n]);
-          else REQUIRE(std::isnan((c.*arr)[n]));
-        }
+        for (auto arr : {NodeArray::Mass, NodeArray::Momentum, NodeArray::Velocity})
+          for (int d = 0; d < (arr == NodeArray::Mass ? 1 : kDim); ++d) {
+            if (in) REQUIRE(component(a, arr, d)[n] == component(c, arr, d)[n]);
+            else REQUIRE(std::isnan(component(c, arr, d)[n]));
+          }
       }
     REQUIRE(outside > 0);
   }
@@ -651,12 +673,12 @@ TEST_CASE("weld of void faces: centre of mass, merged scatter velocity, loss 1/2
   const double h2 = g.h * g.h;
   // full node: field 0 (m 2, u (1, 0), v (1.5, 0)), field 1 (m 1, u (-2, 1), v (-1, 1)), volume 0.9 h^2
   G.m[full] = 2; G.m[full + fs] = 1;
-  G.px[full] = 1; G.py[full] = 0; G.px[full + fs] = -2; G.py[full + fs] = 1;  // scatter velocities
-  G.vx[full] = 1.5; G.vy[full] = 0; G.vx[full + fs] = -1; G.vy[full + fs] = 1;
+  G.p[0][full] = 1; G.p[1][full] = 0; G.p[0][full + fs] = -2; G.p[1][full + fs] = 1;  // scatter velocities
+  G.v[0][full] = 1.5; G.v[1][full] = 0; G.v[0][full + fs] = -1; G.v[1][full + fs] = 1;
   G.vol[full] = 0.5 * h2; G.vol[full + fs] = 0.4 * h2;
   // partly filled node: volume 0.5 h^2, below the threshold
   G.m[part] = 1; G.m[part + fs] = 1;
-  G.vx[part] = 3; G.vx[part + fs] = -3;
+  G.v[0][part] = 3; G.v[0][part + fs] = -3;
   G.vol[part] = 0.25 * h2; G.vol[part + fs] = 0.25 * h2;
   GridUpdateParams q;
   q.scatter_velocity = true;
@@ -666,19 +688,19 @@ TEST_CASE("weld of void faces: centre of mass, merged scatter velocity, loss 1/2
   c.midstep = true;
   std::vector<double> loss(static_cast<std::size_t>(g.sy()), 0.0);
   grid_contact(g, g.all_nodes(), G, q, c, loss.data());
-  CHECK(G.vx[full] == Approx((2 * 1.5 + 1 * -1.0) / 3));
-  CHECK(G.vx[full + fs] == G.vx[full]);
-  CHECK(G.vy[full] == Approx(1.0 / 3));
-  CHECK(G.px[full] == Approx((2 * 1.0 - 2.0) / 3));  // merged scatter velocity
-  CHECK(G.px[full + fs] == G.px[full]);
-  CHECK(G.py[full] == Approx(1.0 / 3));
+  CHECK(G.v[0][full] == Approx((2 * 1.5 + 1 * -1.0) / 3));
+  CHECK(G.v[0][full + fs] == G.v[0][full]);
+  CHECK(G.v[1][full] == Approx(1.0 / 3));
+  CHECK(G.p[0][full] == Approx((2 * 1.0 - 2.0) / 3));  // merged scatter velocity
+  CHECK(G.p[0][full + fs] == G.p[0][full]);
+  CHECK(G.p[1][full] == Approx(1.0 / 3));
   double total = 0;
   for (double l : loss) total += l;
   const double mu = 2.0 * 1.0 / 3.0;
   CHECK(total == Approx(0.5 * mu * (3.0 * 3.0 + 1.0 * 1.0)));
   CHECK(G.heat[full] == 0.0);
-  CHECK(G.vx[part] == 3.0);
-  CHECK(G.vx[part + fs] == -3.0);
+  CHECK(G.v[0][part] == 3.0);
+  CHECK(G.v[0][part + fs] == -3.0);
 }
 
 // Four void-face fields (contact.void_face_fields = 4): the weld takes every field present at a
@@ -697,19 +719,19 @@ TEST_CASE("weld of four void-face fields: centre of mass of the fields present, 
   for (int f = 0; f < 4; ++f) {
     const std::size_t k = full + f * fs;
     G.m[k] = m[f];
-    G.px[k] = u[f];
-    G.py[k] = w[f];
-    G.vx[k] = v[f];
-    G.vy[k] = 0.5 * v[f];
+    G.p[0][k] = u[f];
+    G.p[1][k] = w[f];
+    G.v[0][k] = v[f];
+    G.v[1][k] = 0.5 * v[f];
     G.vol[k] = m[f] > 0 ? 0.95 * h2 * m[f] / 4.0 : 0.0;
   }
   // a full node with one field only, and a node of two fields below the fill
   G.m[lone + 2 * fs] = 1.0;
-  G.vx[lone + 2 * fs] = 7.0;
+  G.v[0][lone + 2 * fs] = 7.0;
   G.vol[lone + 2 * fs] = h2;
   G.m[part] = G.m[part + 3 * fs] = 1.0;
-  G.vx[part] = 3.0;
-  G.vx[part + 3 * fs] = -3.0;
+  G.v[0][part] = 3.0;
+  G.v[0][part + 3 * fs] = -3.0;
   G.vol[part] = G.vol[part + 3 * fs] = 0.25 * h2;
   GridUpdateParams q;
   q.scatter_velocity = true;
@@ -724,22 +746,22 @@ TEST_CASE("weld of four void-face fields: centre of mass of the fields present, 
   for (int f = 0; f < 4; ++f) {
     const std::size_t k = full + f * fs;
     if (m[f] == 0.0) {
-      CHECK(G.vx[k] == 0.0);  // an absent field keeps its (zero) velocity
+      CHECK(G.v[0][k] == 0.0);  // an absent field keeps its (zero) velocity
       continue;
     }
-    CHECK(G.vx[k] == Approx(cx));
-    CHECK(G.vy[k] == Approx(0.5 * cx));
-    CHECK(G.px[k] == Approx(ux));
-    CHECK(G.py[k] == Approx(uy).margin(1e-15));
+    CHECK(G.v[0][k] == Approx(cx));
+    CHECK(G.v[1][k] == Approx(0.5 * cx));
+    CHECK(G.p[0][k] == Approx(ux));
+    CHECK(G.p[1][k] == Approx(uy).margin(1e-15));
     CHECK(G.heat[k] == 0.0);
-    mom += m[f] * G.vx[k];
+    mom += m[f] * G.v[0][k];
     expected += 0.5 * m[f] * ((u[f] - ux) * (u[f] - ux) + (w[f] - uy) * (w[f] - uy));
   }
   CHECK(mom == Approx(2 * 1.5 - 1.0 + 2.0));
   double total = 0;
   for (double l : loss) total += l;
   CHECK(total == Approx(expected));
-  CHECK(G.vx[lone + 2 * fs] == 7.0);
-  CHECK(G.vx[part] == 3.0);
-  CHECK(G.vx[part + 3 * fs] == -3.0);
+  CHECK(G.v[0][lone + 2 * fs] == 7.0);
+  CHECK(G.v[0][part] == 3.0);
+  CHECK(G.v[0][part + 3 * fs] == -3.0);
 }

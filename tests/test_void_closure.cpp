@@ -2,6 +2,8 @@
 // point whose nodes are all full, one welded, joins field 0) and close_cracks (a fractured point
 // among compressed cell-mates: its group shares one density, volume conserved, energy untouched).
 #include <catch2/catch.hpp>
+
+#include <array>
 #include <omp.h>
 
 #include <cmath>
@@ -14,6 +16,11 @@
 #include "kernels/void_closure.hpp"
 
 using namespace smpm::kern;
+
+namespace {
+// the position arrays of merge_closed_faces
+std::array<const double*, kDim> xy(const double* x, const double* y) { return {x, y}; }
+}  // namespace
 
 namespace {
 
@@ -170,7 +177,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   for (int j = 5; j <= 8; ++j)
     for (int i = 0; i <= 3; ++i) m[g.node(i, j) + nn] = 0.0;  // no field 1 near point 3
   std::vector<std::uint8_t> field{1, 1, 0, 1, 1};
-  const std::size_t merged = merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), field.data(), 5, q, state.data());
+  const std::size_t merged = merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(x.data(), y.data()).data(), field.data(), 5, q, state.data());
   CHECK(merged == 2);
   CHECK(int(field[0]) == 0);
   CHECK(int(field[1]) == 1);
@@ -180,7 +187,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   // an unfilled node across the periodic seam keeps point 4 in field 1
   std::vector<std::uint8_t> f2{1};
   vol[g.node(g.nx - 1, 1)] = 0.0;
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, &x[4], &y[4], f2.data(), 1, q, state.data()) == 0);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(&x[4], &y[4]).data(), f2.data(), 1, q, state.data()) == 0);
   CHECK(int(f2[0]) == 1);
 }
 
@@ -207,13 +214,13 @@ TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full 
   std::vector<std::uint8_t> state(nn, 7);
   const std::vector<double> x{3.5e-6, 3.5e-6, 3.5e-6}, y{3.5e-6, 3.5e-6, 3.5e-6};
   std::vector<std::uint8_t> field{3, 2, 1};
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), field.data(), 3, q, state.data()) == 3);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(x.data(), y.data()).data(), field.data(), 3, q, state.data()) == 3);
   CHECK(int(field[0]) == 0);
   CHECK(int(field[1]) == 0);
   CHECK(int(field[2]) == 0);
   // field 3 alone fills no node (0.45 of a cell): the merge needs the fields together
   for (std::size_t k = 0; k < nn; ++k) vol[k + 2 * nn] = 0.4 * g.h * g.h;
   std::vector<std::uint8_t> f3{3};
-  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, x.data(), y.data(), f3.data(), 1, q, state.data()) == 0);
+  CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(x.data(), y.data()).data(), f3.data(), 1, q, state.data()) == 0);
   CHECK(int(f3[0]) == 3);
 }
