@@ -3,14 +3,17 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <optional>
-#include <tuple>
 #include <limits>
+#include <optional>
+#include <stdexcept>
+#include <tuple>
 #include <unordered_map>
 
 #include "engine/case_reader.hpp"
 #include "engine/porous.hpp"
+#include "kernels/tensor.hpp"
 #include "kernels/transfer.hpp"
 
 namespace smpm {
@@ -18,6 +21,7 @@ namespace smpm {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr int kDim = kern::kDim;
 
 kern::Wall wall_kind(const std::string& s) {
   if (s == "slip") return kern::Wall::Slip;
@@ -88,25 +92,58 @@ std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem
                   "set the top-level key 'materials_file'");
 }
 
-// Lattice of sub-cell centres: point (a, b) at (x0 + (a + 0.5) d, y0 + (b + 0.5) d), d = h / ppc.
+using Point = std::array<double, kDim>;  // a position [m]
+
+// An axis-aligned box [lo, hi] [m].
+struct Box {
+  Point lo{}, hi{};
+};
+
+// kern::GridGeom's per-axis fields by axis index.
+static_assert(kDim == 2, "grid_origin and grid_cells name the fields of a two-axis kern::GridGeom");
+double& grid_origin(kern::GridGeom& g, int a) { return a == 0 ? g.x0 : g.y0; }
+double grid_origin(const kern::GridGeom& g, int a) { return a == 0 ? g.x0 : g.y0; }
+int& grid_cells(kern::GridGeom& g, int a) { return a == 0 ? g.nx : g.ny; }
+int grid_cells(const kern::GridGeom& g, int a) { return a == 0 ? g.nx : g.ny; }
+
+// A body's bounding box (BodyInfo keeps it as x0, x1, y0, y1).
+Box body_box(const BodyInfo& b) { return {{b.x0, b.y0}, {b.x1, b.y1}}; }
+void set_body_box(BodyInfo& b, const Box& box) {
+  b.x0 = box.lo[0]; b.x1 = box.hi[0]; b.y0 = box.lo[1]; b.y1 = box.hi[1];
+}
+
+// A per-axis case key: axis_key(1, "_range") = "y_range".
+std::string axis_key(int a, const char* suffix) { return std::string(kern::kAxisNames[a]) + suffix; }
+
+// Whether p lies in the half-open box [lo, hi).
+bool in_half_open(const Box& b, const Point& p) {
+  for (int a = 0; a < kDim; ++a)
+    if (!(p[a] >= b.lo[a] && p[a] < b.hi[a])) return false;
+  return true;
+}
+
+// Lattice of sub-cell centres: point (a, b) at (x0 + (a + 0.5) d, y0 + (b + 0.5) d), d = h / ppc,
+// over the sites near `box`; a site holds a point where inside(its centre) is true.
 template <class Inside>
-Particles fill_lattice(const kern::GridGeom& g, int ppc, double bx0, double bx1, double by0, double by1,
-                       double rho0, double vx, double vy, std::uint8_t body, Inside inside) {
+Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double rho0, double vx, double vy,
+                       std::uint8_t body, Inside inside) {
   Particles P;
   const double d = g.h / ppc;
-  const long a0 = std::max(0L, static_cast<long>(std::floor((bx0 - g.x0) / d - 0.5)));
-  const long a1 = std::min(static_cast<long>(g.nx) * ppc - 1, static_cast<long>(std::ceil((bx1 - g.x0) / d)));
-  const long b0 = std::max(0L, static_cast<long>(std::floor((by0 - g.y0) / d - 0.5)));
-  const long b1 = std::min(static_cast<long>(g.ny) * ppc - 1, static_cast<long>(std::ceil((by1 - g.y0) / d)));
+  std::array<long, kDim> first{}, last{};  // lattice indices per axis
+  for (int a = 0; a < kDim; ++a) {
+    const double o = grid_origin(g, a);
+    first[a] = std::max(0L, static_cast<long>(std::floor((box.lo[a] - o) / d - 0.5)));
+    last[a] = std::min(static_cast<long>(grid_cells(g, a)) * ppc - 1, static_cast<long>(std::ceil((box.hi[a] - o) / d)));
+  }
   std::size_t n = 0;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) P.resize(n);
     std::size_t k = 0;
-    for (long b = b0; b <= b1; ++b) {
+    for (long b = first[1]; b <= last[1]; ++b) {
       const double y = g.y0 + (b + 0.5) * d;
-      for (long a = a0; a <= a1; ++a) {
+      for (long a = first[0]; a <= last[0]; ++a) {
         const double x = g.x0 + (a + 0.5) * d;
-        if (!inside(x, y)) continue;
+        if (!inside(Point{x, y})) continue;
         if (pass == 1) {
           P.x[k] = x;
           P.y[k] = y;
@@ -122,6 +159,602 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, double bx0, double bx1,
     n = k;
   }
   return P;
+}
+
+// ---- Body shapes ----
+
+// A body's shape as read from its keys [m]: a rectangle's box, a disk's centre and radius.
+struct ShapeParams {
+  Box box;
+  Point centre{};
+  double radius = 0.0;
+};
+
+// One value of [[bodies]] `shape`: the keys it reads, which lattice points it holds, its
+// bounding box, and its outline (closed) rebuilt from the bounding box alone, which is all a
+// mirror copy has: gauges are placed in the outline.
+struct BodyShape {
+  const char* name;
+  ShapeParams (*read)(CaseReader& r);
+  std::vector<std::string> size_keys;  // the keys that set its size, named when it needs too much memory
+  bool (*inside)(const ShapeParams& s, const Point& p);
+  Box (*bbox)(const ShapeParams& s);
+  bool (*outline)(const Box& box, const Point& p);
+};
+
+ShapeParams read_rectangle(CaseReader& r) {
+  ShapeParams s;
+  for (int a = 0; a < kDim; ++a) std::tie(s.box.lo[a], s.box.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
+  return s;
+}
+bool rectangle_inside(const ShapeParams& s, const Point& p) { return in_half_open(s.box, p); }
+Box rectangle_bbox(const ShapeParams& s) { return s.box; }
+bool rectangle_outline(const Box& b, const Point& p) {
+  for (int a = 0; a < kDim; ++a)
+    if (!(p[a] >= b.lo[a] && p[a] <= b.hi[a])) return false;
+  return true;
+}
+
+ShapeParams read_disk(CaseReader& r) {
+  ShapeParams s;
+  std::tie(s.centre[0], s.centre[1]) = r.pair("center", kLength, false);
+  s.radius = r.quantity("radius", kLength, 0.0, kInf);
+  return s;
+}
+bool disk_inside(const ShapeParams& s, const Point& p) {
+  double q = 0.0;  // squared distance from the centre [m^2]
+  for (int a = 0; a < kDim; ++a) q += (p[a] - s.centre[a]) * (p[a] - s.centre[a]);
+  return q < s.radius * s.radius;
+}
+Box disk_bbox(const ShapeParams& s) {
+  Box b;
+  for (int a = 0; a < kDim; ++a) {
+    b.lo[a] = s.centre[a] - s.radius;
+    b.hi[a] = s.centre[a] + s.radius;
+  }
+  return b;
+}
+// The disk inscribed in the box: radius half its width, centred on the box.
+bool disk_outline(const Box& b, const Point& p) {
+  const double r = 0.5 * (b.hi[0] - b.lo[0]), dx = p[0] - (b.lo[0] + r), dy = p[1] - 0.5 * (b.lo[1] + b.hi[1]);
+  return dx * dx + dy * dy <= r * r;
+}
+
+const BodyShape kShapes[] = {
+    {"rectangle", read_rectangle, {axis_key(0, "_range"), axis_key(1, "_range")}, rectangle_inside, rectangle_bbox,
+     rectangle_outline},
+    {"disk", read_disk, {"radius"}, disk_inside, disk_bbox, disk_outline},
+};
+
+std::vector<std::string> shape_names() {
+  std::vector<std::string> names;
+  for (const BodyShape& s : kShapes) names.emplace_back(s.name);
+  return names;
+}
+
+const BodyShape& find_shape(const std::string& name) {
+  for (const BodyShape& s : kShapes)
+    if (name == s.name) return s;
+  throw std::logic_error("no body shape named '" + name + "'");
+}
+
+// Whether p lies within a body's outline (its shape's, voids included).
+bool in_outline(const BodyInfo& b, const Point& p) { return find_shape(b.shape).outline(body_box(b), p); }
+
+// ---- Case sections ----
+
+// [run]
+void read_run(CaseReader& top, Scene& s) {
+  CaseReader r = top.table("run");
+  s.run.end_time = r.quantity("end_time", kTime, 0.0, kInf);
+  if (!(s.run.end_time > 0.0))
+    throw CaseError("case key 'run.end_time': value 0 is out of range: the simulated time must be above 0 "
+                    "(e.g. end_time_ns = 200)");
+  s.run.snapshot_interval = r.quantity("snapshot_interval", kTime, 0.0, kInf, 0.0);
+  s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
+  s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
+  s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
+  s.run.checkpoint_interval = r.number("checkpoint_interval_s", 0.0, 1e7, 300.0);
+  // sizes are checked against these before anything is allocated (the grid in [grid], the
+  // bodies' points in check_points, the snapshots' volume after the bodies)
+  const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  const double mem_default = phys > 0 ? 0.8 * phys / 1e9 : 16.0;
+  s.run.max_memory = 1e9 * r.number("max_memory_gb", 1e-3, 1e6, mem_default);
+  s.run.max_output = 1e9 * r.number("max_output_gb", 1e-3, 1e9, 20.0);
+  r.finish();
+}
+
+// Bytes of the grid: about 14 arrays of 8 bytes per node and field (grid.hpp), two fields where
+// faces separate; `cells` is the number of cells.
+double grid_bytes(double cells) { return cells * 14 * 8 * 2; }
+
+// [grid]: each axis's range a whole number of cells of cell_size, the grid's memory within
+// run.max_memory
+void read_grid(CaseReader& top, Scene& s) {
+  CaseReader r = top.table("grid");
+  const double h = r.quantity("cell_size", kLength, 1e-12, kInf);
+  Box range;
+  for (int a = 0; a < kDim; ++a) std::tie(range.lo[a], range.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
+  s.geom.h = h;
+  Point f{};  // cells along each axis, as read
+  double cells = 1.0;
+  bool too_many = false;
+  std::string keys = "case keys 'grid.cell_size'", counts;
+  for (int a = 0; a < kDim; ++a) {
+    grid_origin(s.geom, a) = range.lo[a];
+    f[a] = (range.hi[a] - range.lo[a]) / h;
+    cells *= f[a];
+    too_many = too_many || !(f[a] <= 1e8);
+    keys += ", 'grid." + axis_key(a, "_range") + "'";
+    counts += (a ? " x " : "") + format_number(f[a]);
+  }
+  if (!(grid_bytes(cells) <= s.run.max_memory) || too_many)
+    throw CaseError(keys + ": a grid of " + counts + " cells of " + format_number(h * 1e6) + " um needs about " +
+                    format_number(grid_bytes(cells) / 1e9) + " GB, more than 'run.max_memory_gb' = " +
+                    format_number(s.run.max_memory / 1e9) + " (default 0.8 of this machine's memory); use larger cells "
+                    "or a smaller domain, or raise run.max_memory_gb");
+  constexpr const char* kExtent[] = {"width", "height", "depth"};
+  for (int a = 0; a < kDim; ++a) {
+    const int n = grid_cells(s.geom, a) = static_cast<int>(std::lround(f[a]));
+    if (std::fabs(f[a] - n) > 1e-6 * f[a] || n < 1)
+      throw CaseError("case key 'grid." + axis_key(a, "_range") + "': " + kExtent[a] + " " +
+                      format_number((range.hi[a] - range.lo[a]) * 1e6, 10) + " um is not a whole number of cells of "
+                      "'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
+  }
+  s.geom.periodic_x = r.boolean("periodic_x", false);
+  s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
+  if (s.geom.periodic_x && s.geom.nx < 4)
+    throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
+                    std::to_string(s.geom.nx));
+  r.finish();
+}
+
+// [solver]
+void read_solver(CaseReader& top, Scene& s) {
+  CaseReader r = top.table("solver");
+  const std::string shape = r.choice("shape", {"linear", "ugimp", "quadratic", "cubic"}, "quadratic");
+  s.solver.shape = shape == "linear"   ? kern::ShapeKind::Linear
+                   : shape == "ugimp"  ? kern::ShapeKind::UGIMP
+                   : shape == "cubic"  ? kern::ShapeKind::Cubic
+                                       : kern::ShapeKind::Quadratic;
+  s.solver.transfer = r.choice("transfer", {"apic", "flip"}, "apic") == "flip" ? Transfer::FLIP : Transfer::APIC;
+  s.solver.flip_alpha = r.number("flip_alpha", 0.0, 1.0, 0.99);
+  s.solver.scheme = r.choice("scheme", {"usl", "musl"}, "usl") == "musl" ? Scheme::MUSL : Scheme::USL;
+  const std::string sr = r.choice("strain_rate", {"auto", "midstep", "updated"}, "auto");
+  s.solver.strain_rate = sr == "midstep" ? StrainRate::Midstep : sr == "updated" ? StrainRate::Updated : StrainRate::Auto;
+  s.solver.cfl = r.number("cfl", 1e-6, 1.0, 0.4);
+  s.solver.fixed_dt = r.quantity("dt", kTime, 0.0, kInf, 0.0);
+  s.solver.permute_every = static_cast<int>(r.integer("permute_every", 0, 1000000, 20));
+  s.solver.artificial_viscosity = r.boolean("artificial_viscosity", false);
+  s.solver.av_linear = r.number("viscosity_linear", 0.0, 10.0, 0.06);
+  s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
+  s.solver.heat_conduction = r.boolean("heat_conduction", false);
+  s.solver.crack_closure = r.boolean("crack_closure", true);
+  const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
+  s.solver.gravity[0] = gx;
+  s.solver.gravity[1] = gy;
+  r.finish();
+}
+
+// [walls]: the kind of each side of the grid, by axis: its lower side, then its upper side.
+void read_walls(CaseReader& top, Scene& s) {
+  constexpr const char* kKeys[kDim][2] = {{"left", "right"}, {"bottom", "top"}};
+  CaseReader r = top.table("walls");
+  const std::vector<std::string> kinds{"none", "slip", "noslip"};
+  for (int a = 0; a < kDim; ++a) {
+    s.solver.walls.lo[a] = wall_kind(r.choice(kKeys[a][0], kinds, "none"));
+    s.solver.walls.hi[a] = wall_kind(r.choice(kKeys[a][1], kinds, "none"));
+  }
+  if (s.geom.periodic_x && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
+    throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
+  r.finish();
+}
+
+// [figures]: colour ranges of the maps that scripts/figures.py draws (the resolved case
+// carries them to run.json); absent: from the data (1st-99th percentile of the snapshot)
+void read_figures(CaseReader& top) {
+  CaseReader r = top.table("figures");
+  if (r.has("p_range")) r.pair("p_range", kStress, true);
+  if (r.has("t_range")) r.pair("t_range", kTemperature, true);
+  r.finish();
+}
+
+// [contact]; returns the void faces' reach [cells] (void_face_reach_cells; used with the bodies).
+double read_contact(CaseReader& top, const toml::table& doc, Scene& s) {
+  double void_reach_cells = 3.0;
+  CaseReader r = top.table("contact");
+  s.solver.contact = r.choice("mode", {"single_field", "multi_field"}, "single_field") == "multi_field";
+  s.solver.friction = r.number("friction", 0.0, 10.0, 0.0);
+  s.solver.contact_volume_fraction = r.number("volume_fraction", 0.0, 2.0, 1.0);
+  if (s.solver.contact && s.solver.scheme != Scheme::USL)
+    throw CaseError("case key 'contact.mode': 'multi_field' runs with solver.scheme = \"usl\" only");
+  // void faces (checked against the bodies in check_contact): default 'separate' where a body
+  // has voids and nothing rules it out
+  bool porous = false;
+  if (const toml::array* bs = doc.get_as<toml::array>("bodies"))
+    for (const auto& b : *bs)
+      if (const toml::table* t = b.as_table()) porous = porous || t->contains("voids");
+  const bool can = porous && !s.solver.contact && s.solver.scheme == Scheme::USL;
+  if (r.choice("void_faces", {"separate", "single_field"}, can ? "separate" : "single_field") == "separate") {
+    s.solver.void_faces = VoidFaces::Separate;
+    s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
+    void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
+    s.solver.void_face_merge = r.boolean("void_face_merge", true);
+    const long nf = r.integer("void_face_fields", 2, 4, 2);
+    if (nf == 3)
+      throw CaseError("case key 'contact.void_face_fields' = 3: allowed are 2 (the faces split along the impact "
+                      "direction) and 4 (split across it too, for voids a few cells wide)");
+    if (nf == 4 && s.solver.transfer != Transfer::APIC)
+      throw CaseError("case key 'contact.void_face_fields' = 4 runs with solver.transfer = \"apic\" only (the weld of "
+                      "four fields takes APIC's scatter velocity); use 2 with FLIP");
+    s.solver.void_face_fields = static_cast<int>(nf);
+  } else {
+    for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells", "void_face_merge", "void_face_fields"})
+      if (r.has(k))
+        throw CaseError(std::string("case key 'contact.") + k + "' applies with contact.void_faces = \"separate\" only; "
+                        "this case has \"single_field\"" + (can ? "" : " (the default here: no voids, two-body contact or MUSL)"));
+  }
+  r.finish();
+  return void_reach_cells;
+}
+
+using MaterialIndex = std::unordered_map<std::string, int>;  // material name -> index in Scene::materials
+
+// The materials library, parsed when a material first names a base.
+struct Library {
+  std::optional<toml::table> table;
+  std::filesystem::path path;
+};
+
+// [materials.NAME] with base = "ENTRY": the library's entry, with this table's keys replacing
+// the library's, whatever unit they are given in.
+Material read_based_material(CaseReader& top, CaseReader& r, const std::string& mname, const toml::table& own,
+                             const std::string& base, Library& lib, const std::filesystem::path& case_dir, Scene& s) {
+  if (!lib.table) {
+    lib.path = find_materials_file(top, case_dir);
+    lib.table = parse_case_file(lib.path);
+    s.resolved.insert_or_assign("materials_file_used", lib.path.string());
+  }
+  const toml::table* entry = lib.table->get_as<toml::table>(base);
+  if (!entry) {
+    std::string names;
+    for (const auto& [lk, lv] : *lib.table) names += (names.empty() ? "'" : ", '") + std::string(lk.str()) + "'";
+    throw CaseError("case key 'materials." + mname + ".base': '" + base + "' is not in " + lib.path.string() +
+                    "; it has " + names);
+  }
+  toml::table merged = *entry;
+  for (const auto& [ok, ov] : own) {
+    const std::string key(ok.str());
+    if (key == "base") continue;
+    std::vector<std::string> drop;
+    for (const auto& [lk, lv] : merged)
+      if (CaseReader::stem(std::string(lk.str())) == CaseReader::stem(key)) drop.emplace_back(lk.str());
+    for (const auto& d : drop) merged.erase(d);
+    merged.insert_or_assign(ok, ov);
+  }
+  r.table(mname);  // marks the key read and creates its resolved table
+  toml::table& out = *s.resolved["materials"][mname].as_table();
+  out.insert_or_assign("base", base);
+  CaseReader mr(merged, "materials." + mname, out);
+  return read_material(mr, mname, &own);
+}
+
+// [materials.NAME]: each material's own keys, or a library entry (`base`) with its keys on top.
+MaterialIndex read_materials(CaseReader& top, const toml::table& doc, const std::filesystem::path& case_dir, Scene& s) {
+  MaterialIndex mat_index;
+  CaseReader r = top.table("materials");
+  const toml::table* mt = doc.get_as<toml::table>("materials");
+  if (!mt || mt->empty()) throw CaseError("case table [materials] is required: add at least one [materials.NAME]");
+  Library library;
+  for (const auto& [k, v] : *mt) {
+    const std::string mname(k.str());
+    mat_index[mname] = static_cast<int>(s.materials.size());
+    const toml::table* own = v.as_table();
+    if (!own) throw CaseError("case key 'materials." + mname + "': expected a table [materials." + mname + "]");
+    if (own->contains("base") && !own->get_as<std::string>("base"))
+      throw CaseError("case key 'materials." + mname + ".base': expected the name of a library entry in quotes");
+    if (const auto base = own->get_as<std::string>("base"))
+      s.materials.push_back(read_based_material(top, r, mname, *own, base->get(), library, case_dir, s));
+    else
+      s.materials.push_back(read_material(r.table(mname), mname));
+  }
+  r.finish();
+  return mat_index;
+}
+
+// What the bodies of a case share while they are read: one point lattice, the memory their
+// points need, and the lattice sites they hold (bodies may not overlap).
+struct BodyLattice {
+  int ppc = 0;              // points per cell along each axis, the first body's (0 before it)
+  double points = 0.0;      // points of the bodies read so far
+  double grid_bytes = 0.0;  // the grid's share of run.max_memory [bytes]
+  std::unordered_map<long long, std::size_t> taken;  // lattice site -> body
+};
+
+// Points a body within `box` would hold, checked before any is made: about 200 bytes each
+// (run.json, particle_bytes_per_particle) and 8 for the void cutter's lattice; the grid's share
+// was checked with [grid]. `keys`: the keys that set the body's size.
+void check_points(const Scene& s, BodyLattice& L, const std::string& keys, const Box& box) {
+  const double d = s.geom.h / L.ppc;
+  double pts = 1.0;
+  for (int a = 0; a < kDim; ++a) pts *= (box.hi[a] - box.lo[a]) / d;
+  L.points += pts;
+  const double bytes = L.points * 208 + L.grid_bytes;
+  if (!(bytes <= s.run.max_memory) || !(L.points < 4e9))
+    throw CaseError("case keys '" + keys + "' with 'grid.cell_size' and 'points_per_cell': about " +
+                    format_number(L.points) + " points need about " + format_number(bytes / 1e9) +
+                    " GB, more than 'run.max_memory_gb' = " + format_number(s.run.max_memory / 1e9) +
+                    " (default 0.8 of this machine's memory); use a smaller body or larger cells, or raise "
+                    "run.max_memory_gb");
+}
+
+// [[bodies]] material: its index in Scene::materials.
+int body_material(CaseReader& r, BodyInfo& info, const Scene& s, const MaterialIndex& mat_index) {
+  info.material = r.string("material");
+  auto it = mat_index.find(info.material);
+  if (it == mat_index.end()) {
+    std::string names;
+    for (const auto& m : s.materials) names += (names.empty() ? "'" : ", '") + m.name + "'";
+    throw CaseError("case key '" + r.path() + ".material': '" + info.material + "' is not a material of this case; defined: " + names);
+  }
+  return it->second;
+}
+
+// [[bodies]] mirror_of: the index of the earlier body this one mirrors, -1 for none.
+long mirror_source(CaseReader& r, const Scene& s, const BodyInfo& info) {
+  const std::string mirror = r.string("mirror_of", "");
+  long src = -1;
+  if (mirror.empty()) return src;
+  std::string names;
+  for (std::size_t k = 0; k < s.bodies.size(); ++k) {
+    if (s.bodies[k].name == mirror) src = static_cast<long>(k);
+    names += (names.empty() ? "'" : ", '") + s.bodies[k].name + "'";
+  }
+  if (src < 0)
+    throw CaseError("case key '" + r.path() + ".mirror_of': '" + mirror + "' is not a body defined before this one" +
+                    (names.empty() ? std::string() : "; defined: " + names));
+  if (s.bodies[src].material != info.material)
+    throw CaseError("case key '" + r.path() + ".material': a mirror copy has the material of '" + mirror + "' ('" +
+                    s.bodies[src].material + "')");
+  return src;
+}
+
+// A mirror copy of the earlier body `src` about y = mirror_plane_y (default: its lower edge): its
+// points (positions, masses, volumes), bounding box, shape and voids reflected.
+Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8_t b, double vx, double vy,
+                      BodyInfo& info, Box& box) {
+  const BodyInfo& sb = s.bodies[src];
+  const double plane = r.quantity("mirror_plane_y", kLength, -kInf, kInf, sb.y0);
+  Particles S;
+  std::size_t first = 0;
+  for (std::size_t k = 0; k < src; ++k) first += s.bodies[k].particles;
+  S.resize(sb.particles);
+  for (std::size_t i = 0; i < sb.particles; ++i) {
+    const std::size_t j = first + i;
+    S.x[i] = s.particles.x[j]; S.y[i] = s.particles.y[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
+  }
+  Particles P = mirror_y(S, plane);
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    P.vx[i] = vx;
+    P.vy[i] = vy;
+    P.body[i] = b;
+  }
+  box = {{sb.x0, 2 * plane - sb.y1}, {sb.x1, 2 * plane - sb.y0}};
+  info.porosity = sb.porosity;
+  info.voids = sb.voids;
+  info.shape = sb.shape;
+  for (Void v : sb.cut) info.cut.push_back({v.x, 2 * plane - v.y, v.r});
+  return P;
+}
+
+// A body of [[bodies]] `shape` (default rectangle): its shape's keys and its points.
+Particles fill_shape(CaseReader& r, const Scene& s, BodyLattice& L, double rho0, double vx, double vy, std::uint8_t b,
+                     BodyInfo& info, Box& box) {
+  const BodyShape& shape = find_shape(r.choice("shape", shape_names(), "rectangle"));
+  const ShapeParams p = shape.read(r);
+  box = shape.bbox(p);
+  info.shape = shape.name;
+  std::string keys;
+  for (const std::string& k : shape.size_keys) keys += (keys.empty() ? "" : "', '") + r.path() + "." + k;
+  check_points(s, L, keys, box);
+  return fill_lattice(s.geom, L.ppc, box, rho0, vx, vy, b, [&](const Point& q) { return shape.inside(p, q); });
+}
+
+// [bodies.voids]: what to cut. Voids beyond 50 times those that would tile the body change
+// nothing: a bound on the random ones.
+VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
+  VoidSpec spec;
+  spec.radius = v.quantity("radius", kLength, 1e-12, kInf);
+  spec.radius_spread = v.quantity("radius_spread", kLength, 0.0, spec.radius * (1 - 1e-12), 0.0);
+  // a void smaller than the point spacing removes no point or one: a porosity target
+  // would need millions of voids (and never end below half the spacing)
+  const double spacing = s.geom.h / ppc, rmin = spec.radius - spec.radius_spread;
+  if (rmin < spacing)
+    throw CaseError("case key '" + v.path() + ".radius': " + format_number(spec.radius * 1e6) + " um" +
+                    (spec.radius_spread > 0 ? " - radius_spread " + format_number(spec.radius_spread * 1e6) + " um" : "") +
+                    " is below the point spacing " + format_number(spacing * 1e6) +
+                    " um (grid.cell_size / points_per_cell); allowed: at least the spacing, or use smaller cells");
+  double area = 1.0;  // of the bounding box [m^2]
+  for (int a = 0; a < kDim; ++a) area *= box.hi[a] - box.lo[a];
+  const double tiling = area / (M_PI * rmin * rmin);
+  const long void_limit = static_cast<long>(std::min(1e8, 50.0 * tiling + 1000.0));
+  if (int(v.has("porosity")) + int(v.has("count")) + int(v.has("center")) != 1)
+    throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
+                    "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
+  if (v.has("center")) {
+    const auto [cx, cy] = v.pair("center", kLength, false);
+    spec.centers.push_back({cx, cy, spec.radius});
+  } else {
+    if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
+    else spec.count = v.integer("count", 0, void_limit);
+    spec.max_voids = void_limit;
+    spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
+  }
+  v.finish();
+  return spec;
+}
+
+// [bodies.voids]: random overlapping circular voids (docs/model.md, "Porous sample") cut from P.
+void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Particles& P, BodyInfo& info) {
+  CaseReader v = r.table("voids");
+  const VoidSpec spec = read_voids(v, s, ppc, box);
+  const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
+  const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, box.lo[0], box.hi[0], box.lo[1], box.hi[1],
+                             spec, period);
+  if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
+    throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
+                    std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +
+                    "); allowed: a porosity these voids can cut, or larger voids");
+  info.porosity = res.porosity;
+  info.voids = res.voids;
+  info.cut = res.cut;
+}
+
+// A body lies within the grid (to round-off) and holds at least one point.
+void check_in_grid(const CaseReader& r, const Scene& s, const BodyInfo& info, const Box& box, const Particles& P) {
+  const double tol = 1e-6 * s.geom.h;  // round-off of x0 + n h
+  bool out = false;
+  std::string extent;
+  for (int a = 0; a < kDim; ++a) {
+    const double g0 = grid_origin(s.geom, a), g1 = g0 + grid_cells(s.geom, a) * s.geom.h;
+    out = out || box.lo[a] < g0 - tol || box.hi[a] > g1 + tol;
+    extent += (a ? " x [" : "[") + std::to_string(g0) + ", " + std::to_string(g1) + "]";
+  }
+  if (out) throw CaseError("case body '" + r.path() + "' (" + info.name + ") extends outside the grid " + extent + " m");
+  if (P.size() == 0) throw CaseError("case body '" + r.path() + "' (" + info.name + ") holds no points: it is smaller than the point spacing");
+}
+
+// Marks the lattice sites of body b's points taken; a site another body holds is an overlap.
+void claim_sites(const std::vector<CaseReader>& bodies, std::size_t b, const Scene& s, BodyLattice& L, const Particles& P) {
+  const double d = s.geom.h / L.ppc;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const long long a = std::llround((P.x[i] - s.geom.x0) / d - 0.5), c = std::llround((P.y[i] - s.geom.y0) / d - 0.5);
+    auto [pos, fresh] = L.taken.emplace(c * (1LL << 32) + a, b);
+    if (!fresh)
+      throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + bodies[b].path() + "' overlap near (" +
+                      std::to_string(P.x[i]) + ", " + std::to_string(P.y[i]) + ") m");
+  }
+}
+
+// [[bodies]] entry b: a shape filled with points, or a mirror copy of an earlier body.
+void read_body(std::vector<CaseReader>& bodies, std::size_t b, Scene& s, const MaterialIndex& mat_index,
+               BodyLattice& L) {
+  CaseReader& r = bodies[b];
+  BodyInfo info;
+  info.name = r.string("name", "body" + std::to_string(b));
+  const int material = body_material(r, info, s, mat_index);
+  const int ppc = static_cast<int>(r.integer("points_per_cell", 1, 8, 2));
+  if (L.ppc && ppc != L.ppc)
+    throw CaseError("case key '" + r.path() + ".points_per_cell': " + std::to_string(ppc) +
+                    " differs from the first body's " + std::to_string(L.ppc) + "; all bodies share one point lattice");
+  L.ppc = ppc;
+  const long src = mirror_source(r, s, info);
+  const auto [vx, vy] = src >= 0 ? r.pair("velocity", kVelocity, false, {s.bodies[src].vx0, -s.bodies[src].vy0})
+                                 : r.pair("velocity", kVelocity, false, {0.0, 0.0});
+  const auto id = static_cast<std::uint8_t>(b);
+  Box box;
+  Particles P = src >= 0 ? mirror_body(r, s, static_cast<std::size_t>(src), id, vx, vy, info, box)
+                         : fill_shape(r, s, L, s.materials[material].rho0, vx, vy, id, info, box);
+  if (src < 0 && r.has("voids")) cut_body_voids(r, s, ppc, box, P, info);
+  info.record_free_surface = r.boolean("record_free_surface", false);
+  r.finish();
+  set_body_box(info, box);
+  check_in_grid(r, s, info, box, P);
+  claim_sites(bodies, b, s, L, P);
+  const double d = s.geom.h / ppc;
+  info.particles = P.size();
+  info.vx0 = vx;
+  info.vy0 = vy;
+  info.area = P.size() * d * d;
+  s.body_material.push_back(material);
+  s.bodies.push_back(info);
+  s.particles.append(P);
+}
+
+// Snapshots: about 18 values of 8 bytes per point each (engine/run.cpp, snapshot_fields), within
+// run.max_output.
+void check_snapshots(const Scene& s) {
+  if (!(s.run.snapshot_interval > 0.0)) return;
+  const double snaps = std::floor(s.run.end_time / s.run.snapshot_interval) + 2.0;
+  const double bytes = snaps * double(s.particles.size()) * 18 * 8;
+  if (!(bytes <= s.run.max_output))
+    throw CaseError("case key 'run.snapshot_interval': " + format_number(s.run.snapshot_interval * 1e9) + " ns over " +
+                    format_number(s.run.end_time * 1e9) + " ns writes " + format_number(snaps) + " snapshots of " +
+                    std::to_string(s.particles.size()) + " points, about " + format_number(bytes / 1e9) +
+                    " GB, more than 'run.max_output_gb' = " + format_number(s.run.max_output / 1e9) +
+                    "; allowed: an interval of at least " +
+                    format_number(s.run.end_time * 1e9 * double(s.particles.size()) * 144 / s.run.max_output) +
+                    " ns, or raise run.max_output_gb");
+}
+
+// [contact] against the bodies. Void faces: the two faces of each void in separate velocity
+// fields, welded where they meet (kern::grid_contact), so that gaps narrower than a cell close.
+void check_contact(Scene& s, double void_reach_cells) {
+  if (s.solver.contact && s.bodies.size() != 2)
+    throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
+                    "field; this case has " + std::to_string(s.bodies.size()) + " bodies");
+  if (s.solver.void_faces != VoidFaces::Separate) return;
+  std::vector<Void> voids;
+  for (const auto& b : s.bodies) voids.insert(voids.end(), b.cut.begin(), b.cut.end());
+  if (voids.empty())
+    throw CaseError("case key 'contact.void_faces': 'separate' needs a body with voids ([bodies.voids]); this case has none");
+  if (s.solver.contact)
+    throw CaseError("case key 'contact.void_faces': 'separate' and contact.mode = 'multi_field' would need four velocity "
+                    "fields (not implemented); use a symmetric case with one field per side, or void_faces = 'single_field'");
+  if (s.solver.scheme != Scheme::USL)
+    throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
+  assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
+                    s.geom.periodic_x ? s.geom.length_x() : 0.0, s.solver.void_face_fields);
+}
+
+// [[bodies]]; returns the points per cell they share. The body named "target" (else body 0)
+// becomes Scene::target.
+int read_bodies(CaseReader& top, Scene& s, const MaterialIndex& mat_index, double void_reach_cells) {
+  auto bodies = top.tables("bodies");
+  if (bodies.empty()) throw CaseError("case array [[bodies]] is required: add at least one body");
+  if (bodies.size() > 255) throw CaseError("case array [[bodies]]: at most 255 bodies, got " + std::to_string(bodies.size()));
+  BodyLattice L;
+  double cells = 1.0;
+  for (int a = 0; a < kDim; ++a) cells *= double(grid_cells(s.geom, a));
+  L.grid_bytes = grid_bytes(cells);
+  for (std::size_t b = 0; b < bodies.size(); ++b) read_body(bodies, b, s, mat_index, L);
+  s.solver.ugimp_lp = 0.5 / L.ppc;
+  check_snapshots(s);
+  check_contact(s, void_reach_cells);
+  for (std::size_t b = 0; b < s.bodies.size(); ++b)
+    if (s.bodies[b].name == "target") s.target = b;
+  return L.ppc;
+}
+
+// [[regions]]: bands across the full width, heights measured from the impact plane y = 0
+void read_regions(CaseReader& top, Scene& s) {
+  // a band's width for its open porosity: the grid's with periodic sides, else the body's
+  auto band_width = [&](std::size_t b) { return s.geom.periodic_x ? s.geom.length_x() : s.bodies[b].x1 - s.bodies[b].x0; };
+  auto regions = top.tables("regions");
+  if (regions.empty()) {
+    // the study's bands, for a target reaching 1000 um above the impact plane or more; a
+    // shorter target gets the same bands scaled by its height / 1000 um, so that they stay
+    // inside it and apart (a 400 um target: I 40-360, II 40-240, III 40-120 um)
+    const double f = std::clamp(s.bodies[s.target].y1 / 1000e-6, 1e-6, 1.0);
+    for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
+      s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target), band_width(s.target)});
+  }
+  for (auto& r : regions) {
+    Region g;
+    g.name = r.string("name");
+    std::tie(g.y0, g.y1) = r.pair("y_range", kLength, true);
+    const std::string body = r.string("body", s.bodies[s.target].name);
+    bool found = false;
+    for (std::size_t b = 0; b < s.bodies.size(); ++b)
+      if (s.bodies[b].name == body) {
+        g.body = static_cast<std::uint8_t>(b);
+        found = true;
+      }
+    if (!found) throw CaseError("case key '" + r.path() + ".body': no body named '" + body + "'");
+    r.finish();
+    g.width = band_width(g.body);
+    s.regions.push_back(g);
+  }
 }
 
 // [[bodies]] record_free_surface: the body's top row at t = 0 (engine/gauges.hpp, top_row). Its top
@@ -181,13 +814,6 @@ std::vector<std::pair<std::string, std::pair<double, double>>> gauge_positions(C
   return at;
 }
 
-// Whether (x, y) lies within a body's outline (its rectangle or disk, voids included).
-bool in_outline(const BodyInfo& b, double x, double y) {
-  if (!b.disk) return x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1;
-  const double r = 0.5 * (b.x1 - b.x0), dx = x - (b.x0 + r), dy = y - 0.5 * (b.y0 + b.y1);
-  return dx * dx + dy * dy <= r * r;
-}
-
 // [[gauges]]: each gauge follows the point nearest its position at t = 0, of the body named by
 // `body`, else of the bodies whose outline holds the position (in_outline: a gauge in a void
 // follows the nearest point of its body); a position outside that body's outline, or every
@@ -218,7 +844,7 @@ void read_gauges(CaseReader& top, Scene& s) {
     for (const auto& [gname, xy] : gauge_positions(r, name)) {
       std::vector<bool> holds(s.bodies.size(), false);
       for (std::size_t k = 0; k < s.bodies.size(); ++k)
-        holds[k] = (body < 0 || body == static_cast<int>(k)) && in_outline(s.bodies[k], xy.first, xy.second);
+        holds[k] = (body < 0 || body == static_cast<int>(k)) && in_outline(s.bodies[k], Point{xy.first, xy.second});
       const auto near = nearest_point(s.particles, xy.first, xy.second, holds);
       if (near.index == s.particles.size())
         throw CaseError(keys + ": gauge '" + gname + "' at [" + format_number(xy.first * 1e6) + ", " +
@@ -242,431 +868,24 @@ void read_gauges(CaseReader& top, Scene& s) {
 
 Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
                          double rho0, double vx, double vy, std::uint8_t body) {
-  return fill_lattice(g, ppc, x0, x1, y0, y1, rho0, vx, vy, body,
-                      [&](double x, double y) { return x >= x0 && x < x1 && y >= y0 && y < y1; });
+  const Box box{{x0, y0}, {x1, y1}};
+  return fill_lattice(g, ppc, box, rho0, vx, vy, body, [&](const Point& p) { return in_half_open(box, p); });
 }
 
 Scene build_scene(const toml::table& doc, const std::string& name, const std::filesystem::path& case_dir) {
   Scene s;
   s.name = name;
   CaseReader top(doc, "", s.resolved);
-
-  // [run]
-  {
-    CaseReader r = top.table("run");
-    s.run.end_time = r.quantity("end_time", kTime, 0.0, kInf);
-    if (!(s.run.end_time > 0.0))
-      throw CaseError("case key 'run.end_time': value 0 is out of range: the simulated time must be above 0 "
-                      "(e.g. end_time_ns = 200)");
-    s.run.snapshot_interval = r.quantity("snapshot_interval", kTime, 0.0, kInf, 0.0);
-    s.run.diagnostics_interval = r.quantity("diagnostics_interval", kTime, 0.0, kInf, 0.0);
-    s.run.progress_interval = r.number("progress_interval_s", 0.0, 1e6, 5.0);
-    s.run.max_steps = r.integer("max_steps", 0, std::numeric_limits<long>::max(), 0);
-    s.run.checkpoint_interval = r.number("checkpoint_interval_s", 0.0, 1e7, 300.0);
-    // sizes are checked against these before anything is allocated (the grid in [grid], the
-    // bodies' points in check_points, the snapshots' volume after the bodies)
-    const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-    const double mem_default = phys > 0 ? 0.8 * phys / 1e9 : 16.0;
-    s.run.max_memory = 1e9 * r.number("max_memory_gb", 1e-3, 1e6, mem_default);
-    s.run.max_output = 1e9 * r.number("max_output_gb", 1e-3, 1e9, 20.0);
-    r.finish();
-  }
-  // [grid]
-  {
-    CaseReader r = top.table("grid");
-    const double h = r.quantity("cell_size", kLength, 1e-12, kInf);
-    const auto [x0, x1] = r.pair("x_range", kLength, true);
-    const auto [y0, y1] = r.pair("y_range", kLength, true);
-    s.geom.h = h;
-    s.geom.x0 = x0;
-    s.geom.y0 = y0;
-    const double fx = (x1 - x0) / h, fy = (y1 - y0) / h;
-    // about 14 arrays of 8 bytes per node and field (grid.hpp), two fields where faces separate
-    if (!(fx * fy * 14 * 8 * 2 <= s.run.max_memory) || !(fx <= 1e8) || !(fy <= 1e8))
-      throw CaseError("case keys 'grid.cell_size', 'grid.x_range', 'grid.y_range': a grid of " + format_number(fx) + " x " +
-                      format_number(fy) + " cells of " + format_number(h * 1e6) + " um needs about " +
-                      format_number(fx * fy * 14 * 8 * 2 / 1e9) + " GB, more than 'run.max_memory_gb' = " +
-                      format_number(s.run.max_memory / 1e9) + " (default 0.8 of this machine's memory); use larger cells "
-                      "or a smaller domain, or raise run.max_memory_gb");
-    s.geom.nx = static_cast<int>(std::lround(fx));
-    s.geom.ny = static_cast<int>(std::lround(fy));
-    if (std::fabs(fx - s.geom.nx) > 1e-6 * fx || s.geom.nx < 1)
-      throw CaseError("case key 'grid.x_range': width " + format_number((x1 - x0) * 1e6, 10) +
-                      " um is not a whole number of cells of 'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
-    if (std::fabs(fy - s.geom.ny) > 1e-6 * fy || s.geom.ny < 1)
-      throw CaseError("case key 'grid.y_range': height " + format_number((y1 - y0) * 1e6, 10) +
-                      " um is not a whole number of cells of 'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
-    s.geom.periodic_x = r.boolean("periodic_x", false);
-    s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
-    if (s.geom.periodic_x && s.geom.nx < 4)
-      throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
-                      std::to_string(s.geom.nx));
-    r.finish();
-  }
-  // [solver]
-  int ppc_all = 0;
-  {
-    CaseReader r = top.table("solver");
-    const std::string shape = r.choice("shape", {"linear", "ugimp", "quadratic", "cubic"}, "quadratic");
-    s.solver.shape = shape == "linear"   ? kern::ShapeKind::Linear
-                     : shape == "ugimp"  ? kern::ShapeKind::UGIMP
-                     : shape == "cubic"  ? kern::ShapeKind::Cubic
-                                         : kern::ShapeKind::Quadratic;
-    s.solver.transfer = r.choice("transfer", {"apic", "flip"}, "apic") == "flip" ? Transfer::FLIP : Transfer::APIC;
-    s.solver.flip_alpha = r.number("flip_alpha", 0.0, 1.0, 0.99);
-    s.solver.scheme = r.choice("scheme", {"usl", "musl"}, "usl") == "musl" ? Scheme::MUSL : Scheme::USL;
-    {
-      const std::string sr = r.choice("strain_rate", {"auto", "midstep", "updated"}, "auto");
-      s.solver.strain_rate = sr == "midstep" ? StrainRate::Midstep : sr == "updated" ? StrainRate::Updated : StrainRate::Auto;
-    }
-    s.solver.cfl = r.number("cfl", 1e-6, 1.0, 0.4);
-    s.solver.fixed_dt = r.quantity("dt", kTime, 0.0, kInf, 0.0);
-    s.solver.permute_every = static_cast<int>(r.integer("permute_every", 0, 1000000, 20));
-    s.solver.artificial_viscosity = r.boolean("artificial_viscosity", false);
-    s.solver.av_linear = r.number("viscosity_linear", 0.0, 10.0, 0.06);
-    s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
-    s.solver.heat_conduction = r.boolean("heat_conduction", false);
-    s.solver.crack_closure = r.boolean("crack_closure", true);
-    const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
-    s.solver.gravity[0] = gx;
-    s.solver.gravity[1] = gy;
-    r.finish();
-  }
-  // [walls]
-  {
-    CaseReader r = top.table("walls");
-    const std::vector<std::string> kinds{"none", "slip", "noslip"};
-    s.solver.walls.lo[0] = wall_kind(r.choice("left", kinds, "none"));
-    s.solver.walls.hi[0] = wall_kind(r.choice("right", kinds, "none"));
-    s.solver.walls.lo[1] = wall_kind(r.choice("bottom", kinds, "none"));
-    s.solver.walls.hi[1] = wall_kind(r.choice("top", kinds, "none"));
-    if (s.geom.periodic_x && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
-      throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
-    r.finish();
-  }
-  // [figures]: colour ranges of the maps that scripts/figures.py draws (the resolved case
-  // carries them to run.json); absent: from the data (1st-99th percentile of the snapshot)
-  {
-    CaseReader r = top.table("figures");
-    if (r.has("p_range")) r.pair("p_range", kStress, true);
-    if (r.has("t_range")) r.pair("t_range", kTemperature, true);
-    r.finish();
-  }
-  // [contact]
-  double void_reach_cells = 3.0;
-  {
-    CaseReader r = top.table("contact");
-    s.solver.contact = r.choice("mode", {"single_field", "multi_field"}, "single_field") == "multi_field";
-    s.solver.friction = r.number("friction", 0.0, 10.0, 0.0);
-    s.solver.contact_volume_fraction = r.number("volume_fraction", 0.0, 2.0, 1.0);
-    if (s.solver.contact && s.solver.scheme != Scheme::USL)
-      throw CaseError("case key 'contact.mode': 'multi_field' runs with solver.scheme = \"usl\" only");
-    // void faces (checked against the bodies below): default 'separate' where a body has voids
-    // and nothing rules it out
-    bool porous = false;
-    if (const toml::array* bs = doc.get_as<toml::array>("bodies"))
-      for (const auto& b : *bs)
-        if (const toml::table* t = b.as_table()) porous = porous || t->contains("voids");
-    const bool can = porous && !s.solver.contact && s.solver.scheme == Scheme::USL;
-    if (r.choice("void_faces", {"separate", "single_field"}, can ? "separate" : "single_field") == "separate") {
-      s.solver.void_faces = VoidFaces::Separate;
-      s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
-      void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
-      s.solver.void_face_merge = r.boolean("void_face_merge", true);
-      const long nf = r.integer("void_face_fields", 2, 4, 2);
-      if (nf == 3)
-        throw CaseError("case key 'contact.void_face_fields' = 3: allowed are 2 (the faces split along the impact "
-                        "direction) and 4 (split across it too, for voids a few cells wide)");
-      if (nf == 4 && s.solver.transfer != Transfer::APIC)
-        throw CaseError("case key 'contact.void_face_fields' = 4 runs with solver.transfer = \"apic\" only (the weld of "
-                        "four fields takes APIC's scatter velocity); use 2 with FLIP");
-      s.solver.void_face_fields = static_cast<int>(nf);
-    } else {
-      for (const char* k : {"void_face_volume_fraction", "void_face_reach_cells", "void_face_merge", "void_face_fields"})
-        if (r.has(k))
-          throw CaseError(std::string("case key 'contact.") + k + "' applies with contact.void_faces = \"separate\" only; "
-                          "this case has \"single_field\"" + (can ? "" : " (the default here: no voids, two-body contact or MUSL)"));
-    }
-    r.finish();
-  }
-  // [materials.NAME]
-  std::unordered_map<std::string, int> mat_index;
-  {
-    CaseReader r = top.table("materials");
-    const toml::table* mt = doc.get_as<toml::table>("materials");
-    if (!mt || mt->empty()) throw CaseError("case table [materials] is required: add at least one [materials.NAME]");
-    std::optional<toml::table> library;
-    std::filesystem::path library_path;
-    for (const auto& [k, v] : *mt) {
-      const std::string mname(k.str());
-      mat_index[mname] = static_cast<int>(s.materials.size());
-      const toml::table* own = v.as_table();
-      if (!own) throw CaseError("case key 'materials." + mname + "': expected a table [materials." + mname + "]");
-      if (own->contains("base") && !own->get_as<std::string>("base"))
-        throw CaseError("case key 'materials." + mname + ".base': expected the name of a library entry in quotes");
-      if (const auto base = own->get_as<std::string>("base")) {
-        // the library entry, then this table's keys on top of it
-        if (!library) {
-          library_path = find_materials_file(top, case_dir);
-          library = parse_case_file(library_path);
-          s.resolved.insert_or_assign("materials_file_used", library_path.string());
-        }
-        const toml::table* entry = library->get_as<toml::table>(base->get());
-        if (!entry) {
-          std::string names;
-          for (const auto& [lk, lv] : *library) names += (names.empty() ? "'" : ", '") + std::string(lk.str()) + "'";
-          throw CaseError("case key 'materials." + mname + ".base': '" + base->get() + "' is not in " +
-                          library_path.string() + "; it has " + names);
-        }
-        // this table's keys replace the library's, whatever unit they are given in
-        toml::table merged = *entry;
-        for (const auto& [ok, ov] : *own) {
-          const std::string key(ok.str());
-          if (key == "base") continue;
-          std::vector<std::string> drop;
-          for (const auto& [lk, lv] : merged)
-            if (CaseReader::stem(std::string(lk.str())) == CaseReader::stem(key)) drop.emplace_back(lk.str());
-          for (const auto& d : drop) merged.erase(d);
-          merged.insert_or_assign(ok, ov);
-        }
-        r.table(mname);  // marks the key read and creates its resolved table
-        toml::table& out = *s.resolved["materials"][mname].as_table();
-        out.insert_or_assign("base", base->get());
-        CaseReader mr(merged, "materials." + mname, out);
-        s.materials.push_back(read_material(mr, mname, own));
-      } else {
-        s.materials.push_back(read_material(r.table(mname), mname));
-      }
-    }
-    r.finish();
-  }
-  // [[bodies]]
-  {
-    auto bodies = top.tables("bodies");
-    if (bodies.empty()) throw CaseError("case array [[bodies]] is required: add at least one body");
-    if (bodies.size() > 255) throw CaseError("case array [[bodies]]: at most 255 bodies, got " + std::to_string(bodies.size()));
-    std::unordered_map<long long, std::size_t> taken;  // lattice site -> body, to reject overlaps
-    // Points a body of w x h would hold, checked before any is made: about 200 bytes each
-    // (run.json, particle_bytes_per_particle) and 8 for the void cutter's lattice; the grid's
-    // share was checked with [grid]
-    double points_so_far = 0.0;
-    const double grid_bytes = double(s.geom.nx) * double(s.geom.ny) * 14 * 8 * 2;
-    auto check_points = [&](const std::string& keys, double w, double hgt, int ppc) {
-      const double d = s.geom.h / ppc, pts = (w / d) * (hgt / d);
-      points_so_far += pts;
-      const double bytes = points_so_far * 208 + grid_bytes;
-      if (!(bytes <= s.run.max_memory) || !(points_so_far < 4e9))
-        throw CaseError("case keys '" + keys + "' with 'grid.cell_size' and 'points_per_cell': about " +
-                        format_number(points_so_far) + " points need about " + format_number(bytes / 1e9) +
-                        " GB, more than 'run.max_memory_gb' = " + format_number(s.run.max_memory / 1e9) +
-                        " (default 0.8 of this machine's memory); use a smaller body or larger cells, or raise "
-                        "run.max_memory_gb");
-    };
-    for (std::size_t b = 0; b < bodies.size(); ++b) {
-      CaseReader& r = bodies[b];
-      BodyInfo info;
-      info.name = r.string("name", "body" + std::to_string(b));
-      info.material = r.string("material");
-      auto it = mat_index.find(info.material);
-      if (it == mat_index.end()) {
-        std::string names;
-        for (const auto& m : s.materials) names += (names.empty() ? "'" : ", '") + m.name + "'";
-        throw CaseError("case key '" + r.path() + ".material': '" + info.material + "' is not a material of this case; defined: " + names);
-      }
-      const Material& mat = s.materials[it->second];
-      const int ppc = static_cast<int>(r.integer("points_per_cell", 1, 8, 2));
-      if (ppc_all && ppc != ppc_all)
-        throw CaseError("case key '" + r.path() + ".points_per_cell': " + std::to_string(ppc) +
-                        " differs from the first body's " + std::to_string(ppc_all) + "; all bodies share one point lattice");
-      ppc_all = ppc;
-      const std::string mirror = r.string("mirror_of", "");
-      long src = -1;
-      if (!mirror.empty()) {
-        std::string names;
-        for (std::size_t k = 0; k < s.bodies.size(); ++k) {
-          if (s.bodies[k].name == mirror) src = static_cast<long>(k);
-          names += (names.empty() ? "'" : ", '") + s.bodies[k].name + "'";
-        }
-        if (src < 0)
-          throw CaseError("case key '" + r.path() + ".mirror_of': '" + mirror + "' is not a body defined before this one" +
-                          (names.empty() ? std::string() : "; defined: " + names));
-        if (s.bodies[src].material != info.material)
-          throw CaseError("case key '" + r.path() + ".material': a mirror copy has the material of '" + mirror + "' ('" +
-                          s.bodies[src].material + "')");
-      }
-      const auto [vx, vy] = src >= 0 ? r.pair("velocity", kVelocity, false, {s.bodies[src].vx0, -s.bodies[src].vy0})
-                                     : r.pair("velocity", kVelocity, false, {0.0, 0.0});
-      Particles P;
-      double bx0, bx1, by0, by1;
-      if (src >= 0) {
-        // mirror image of an earlier body about y = mirror_plane_y (default: its lower edge)
-        const BodyInfo& sb = s.bodies[src];
-        const double plane = r.quantity("mirror_plane_y", kLength, -kInf, kInf, sb.y0);
-        Particles S;
-        std::size_t first = 0;
-        for (std::size_t k = 0; k < static_cast<std::size_t>(src); ++k) first += s.bodies[k].particles;
-        S.resize(sb.particles);
-        for (std::size_t i = 0; i < sb.particles; ++i) {
-          const std::size_t j = first + i;
-          S.x[i] = s.particles.x[j]; S.y[i] = s.particles.y[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
-        }
-        P = mirror_y(S, plane);
-        for (std::size_t i = 0; i < P.size(); ++i) {
-          P.vx[i] = vx;
-          P.vy[i] = vy;
-          P.body[i] = static_cast<std::uint8_t>(b);
-        }
-        bx0 = sb.x0; bx1 = sb.x1; by0 = 2 * plane - sb.y1; by1 = 2 * plane - sb.y0;
-        info.porosity = sb.porosity;
-        info.voids = sb.voids;
-        info.disk = sb.disk;
-        for (Void v : sb.cut) info.cut.push_back({v.x, 2 * plane - v.y, v.r});
-      } else if (r.choice("shape", {"rectangle", "disk"}, "rectangle") == "rectangle") {
-        std::tie(bx0, bx1) = r.pair("x_range", kLength, true);
-        std::tie(by0, by1) = r.pair("y_range", kLength, true);
-        check_points(r.path() + ".x_range', '" + r.path() + ".y_range", bx1 - bx0, by1 - by0, ppc);
-        P = fill_rectangle(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b));
-      } else {
-        const auto [cx, cy] = r.pair("center", kLength, false);
-        const double rad = r.quantity("radius", kLength, 0.0, kInf);
-        bx0 = cx - rad; bx1 = cx + rad; by0 = cy - rad; by1 = cy + rad;
-        info.disk = true;
-        check_points(r.path() + ".radius", bx1 - bx0, by1 - by0, ppc);
-        P = fill_lattice(s.geom, ppc, bx0, bx1, by0, by1, mat.rho0, vx, vy, static_cast<std::uint8_t>(b),
-                         [&](double x, double y) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) < rad * rad; });
-      }
-      if (src < 0 && r.has("voids")) {
-        // random overlapping circular voids (docs/model.md, "Porous sample")
-        CaseReader v = r.table("voids");
-        VoidSpec spec;
-        spec.radius = v.quantity("radius", kLength, 1e-12, kInf);
-        spec.radius_spread = v.quantity("radius_spread", kLength, 0.0, spec.radius * (1 - 1e-12), 0.0);
-        // a void smaller than the point spacing removes no point or one: a porosity target
-        // would need millions of voids (and never end below half the spacing)
-        const double spacing = s.geom.h / ppc, rmin = spec.radius - spec.radius_spread;
-        if (rmin < spacing)
-          throw CaseError("case key '" + v.path() + ".radius': " + format_number(spec.radius * 1e6) + " um" +
-                          (spec.radius_spread > 0 ? " - radius_spread " + format_number(spec.radius_spread * 1e6) + " um" : "") +
-                          " is below the point spacing " + format_number(spacing * 1e6) +
-                          " um (grid.cell_size / points_per_cell); allowed: at least the spacing, or use smaller cells");
-        // voids beyond 50 times those that would tile the body change nothing: a bound on the loops
-        const double tiling = (bx1 - bx0) * (by1 - by0) / (M_PI * rmin * rmin);
-        const long void_limit = static_cast<long>(std::min(1e8, 50.0 * tiling + 1000.0));
-        if (int(v.has("porosity")) + int(v.has("count")) + int(v.has("center")) != 1)
-          throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
-                          "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
-        if (v.has("center")) {
-          const auto [cx, cy] = v.pair("center", kLength, false);
-          spec.centers.push_back({cx, cy, spec.radius});
-        } else {
-          if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
-          else spec.count = v.integer("count", 0, void_limit);
-          spec.max_voids = void_limit;
-          spec.seed = static_cast<std::uint64_t>(v.integer("seed", 0, std::numeric_limits<long>::max(), 1));
-        }
-        v.finish();
-        const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
-        const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, bx0, bx1, by0, by1, spec, period);
-        if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
-          throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
-                          std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +
-                          "); allowed: a porosity these voids can cut, or larger voids");
-        info.porosity = res.porosity;
-        info.voids = res.voids;
-        info.cut = res.cut;
-      }
-      info.record_free_surface = r.boolean("record_free_surface", false);
-      r.finish();
-      info.x0 = bx0; info.x1 = bx1; info.y0 = by0; info.y1 = by1;
-      const double gx1 = s.geom.x0 + s.geom.length_x(), gy1 = s.geom.y0 + s.geom.length_y();
-      const double tol = 1e-6 * s.geom.h;  // round-off of x0 + n h
-      if (bx0 < s.geom.x0 - tol || bx1 > gx1 + tol || by0 < s.geom.y0 - tol || by1 > gy1 + tol)
-        throw CaseError("case body '" + r.path() + "' (" + info.name + ") extends outside the grid [" +
-                        std::to_string(s.geom.x0) + ", " + std::to_string(gx1) + "] x [" + std::to_string(s.geom.y0) +
-                        ", " + std::to_string(gy1) + "] m");
-      if (P.size() == 0) throw CaseError("case body '" + r.path() + "' (" + info.name + ") holds no points: it is smaller than the point spacing");
-      const double d = s.geom.h / ppc;
-      for (std::size_t i = 0; i < P.size(); ++i) {
-        const long long a = std::llround((P.x[i] - s.geom.x0) / d - 0.5), c = std::llround((P.y[i] - s.geom.y0) / d - 0.5);
-        auto [pos, fresh] = taken.emplace(c * (1LL << 32) + a, b);
-        if (!fresh)
-          throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + r.path() + "' overlap near (" +
-                          std::to_string(P.x[i]) + ", " + std::to_string(P.y[i]) + ") m");
-      }
-      info.particles = P.size();
-      info.vx0 = vx;
-      info.vy0 = vy;
-      info.area = P.size() * d * d;
-      s.body_material.push_back(it->second);
-      s.bodies.push_back(info);
-      s.particles.append(P);
-    }
-    s.solver.ugimp_lp = 0.5 / ppc_all;
-    // snapshots: about 18 values of 8 bytes per point each (engine/run.cpp, snapshot_fields)
-    if (s.run.snapshot_interval > 0.0) {
-      const double snaps = std::floor(s.run.end_time / s.run.snapshot_interval) + 2.0;
-      const double bytes = snaps * double(s.particles.size()) * 18 * 8;
-      if (!(bytes <= s.run.max_output))
-        throw CaseError("case key 'run.snapshot_interval': " + format_number(s.run.snapshot_interval * 1e9) + " ns over " +
-                        format_number(s.run.end_time * 1e9) + " ns writes " + format_number(snaps) + " snapshots of " +
-                        std::to_string(s.particles.size()) + " points, about " + format_number(bytes / 1e9) +
-                        " GB, more than 'run.max_output_gb' = " + format_number(s.run.max_output / 1e9) +
-                        "; allowed: an interval of at least " +
-                        format_number(s.run.end_time * 1e9 * double(s.particles.size()) * 144 / s.run.max_output) +
-                        " ns, or raise run.max_output_gb");
-    }
-    if (s.solver.contact && s.bodies.size() != 2)
-      throw CaseError("case key 'contact.mode': 'multi_field' gives each of exactly two bodies its own velocity "
-                      "field; this case has " + std::to_string(s.bodies.size()) + " bodies");
-    // [contact] void faces: the two faces of each void in separate velocity fields, welded
-    // where they meet (kern::grid_contact), so that gaps narrower than a cell close
-    std::vector<Void> voids;
-    for (const auto& b : s.bodies) voids.insert(voids.end(), b.cut.begin(), b.cut.end());
-    if (s.solver.void_faces == VoidFaces::Separate) {
-      if (voids.empty())
-        throw CaseError("case key 'contact.void_faces': 'separate' needs a body with voids ([bodies.voids]); this case has none");
-      if (s.solver.contact)
-        throw CaseError("case key 'contact.void_faces': 'separate' and contact.mode = 'multi_field' would need four velocity "
-                        "fields (not implemented); use a symmetric case with one field per side, or void_faces = 'single_field'");
-      if (s.solver.scheme != Scheme::USL)
-        throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
-      assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
-                        s.geom.periodic_x ? s.geom.length_x() : 0.0, s.solver.void_face_fields);
-    }
-  }
-  for (std::size_t b = 0; b < s.bodies.size(); ++b)
-    if (s.bodies[b].name == "target") s.target = b;
-  // a band's width for its open porosity: the grid's with periodic sides, else the body's
-  auto band_width = [&](std::size_t b) { return s.geom.periodic_x ? s.geom.length_x() : s.bodies[b].x1 - s.bodies[b].x0; };
-  // [[regions]]: bands across the full width, heights measured from the impact plane y = 0
-  {
-    auto regions = top.tables("regions");
-    if (regions.empty()) {
-      // the study's bands, for a target reaching 1000 um above the impact plane or more; a
-      // shorter target gets the same bands scaled by its height / 1000 um, so that they stay
-      // inside it and apart (a 400 um target: I 40-360, II 40-240, III 40-120 um)
-      const double f = std::clamp(s.bodies[s.target].y1 / 1000e-6, 1e-6, 1.0);
-      for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
-        s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target), band_width(s.target)});
-    }
-    for (auto& r : regions) {
-      Region g;
-      g.name = r.string("name");
-      std::tie(g.y0, g.y1) = r.pair("y_range", kLength, true);
-      const std::string body = r.string("body", s.bodies[s.target].name);
-      bool found = false;
-      for (std::size_t b = 0; b < s.bodies.size(); ++b)
-        if (s.bodies[b].name == body) {
-          g.body = static_cast<std::uint8_t>(b);
-          found = true;
-        }
-      if (!found) throw CaseError("case key '" + r.path() + ".body': no body named '" + body + "'");
-      r.finish();
-      g.width = band_width(g.body);
-      s.regions.push_back(g);
-    }
-  }
-  add_free_surfaces(s, s.geom.h / ppc_all);
+  read_run(top, s);
+  read_grid(top, s);
+  read_solver(top, s);
+  read_walls(top, s);
+  read_figures(top);
+  const double void_reach_cells = read_contact(top, doc, s);
+  const MaterialIndex mat_index = read_materials(top, doc, case_dir, s);
+  const int ppc = read_bodies(top, s, mat_index, void_reach_cells);
+  read_regions(top, s);
+  add_free_surfaces(s, s.geom.h / ppc);
   read_gauges(top, s);
   top.finish();
   return s;

@@ -34,7 +34,7 @@ struct BodyInfo {
   double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
   double vx0 = 0.0, vy0 = 0.0;  // initial velocity [m/s]
   double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bounding rectangle [m]
-  bool disk = false;  // its outline: the disk inscribed in that rectangle, else the rectangle
+  std::string shape = "rectangle";  // [[bodies]] shape: its outline, within that rectangle
   double porosity = 0.0;  // fraction of the dense body's points removed by voids
   long voids = 0;
   std::vector<Void> cut;  // its voids (a mirror copy: their mirror images)
