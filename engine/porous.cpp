@@ -9,6 +9,88 @@
 
 namespace smpm {
 
+namespace {
+
+// The points of one body by lattice site: site[(b - b0) na + (a - a0)] is the index of the point
+// at site (a, b), centre (ox + (a + 1/2) d, oy + (b + 1/2) d), or -1 for none.
+struct SiteIndex {
+  long a0 = 0, b0 = 0, na = 0, nb = 0;
+  std::vector<std::int64_t> site;
+};
+
+SiteIndex index_sites(const Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1) {
+  SiteIndex S;
+  S.a0 = static_cast<long>(std::floor((x0 - ox) / d));
+  S.b0 = static_cast<long>(std::floor((y0 - oy) / d));
+  S.na = static_cast<long>(std::ceil((x1 - ox) / d)) - S.a0 + 1;
+  S.nb = static_cast<long>(std::ceil((y1 - oy) / d)) - S.b0 + 1;
+  S.site.assign(static_cast<std::size_t>(S.na * S.nb), -1);
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    const long a = static_cast<long>(std::floor((P.x[i] - ox) / d)) - S.a0;
+    const long b = static_cast<long>(std::floor((P.y[i] - oy) / d)) - S.b0;
+    if (a < 0 || a >= S.na || b < 0 || b >= S.nb) throw std::logic_error("cut_voids: point outside the body rectangle");
+    S.site[static_cast<std::size_t>(b * S.na + a)] = static_cast<std::int64_t>(i);
+  }
+  return S;
+}
+
+// The points removed so far: removed[i] for point i, `count` of them.
+struct Removal {
+  std::vector<char> removed;
+  std::size_t count = 0;
+};
+
+// Removes the points within the void v: the void's rows within the body, and in each row its
+// columns within the body (or within one period of pa lattice steps, pa > 0: x wraps), so that
+// a void far larger than the body costs no more than the body.
+void remove_in_void(const SiteIndex& S, double d, double ox, double oy, long pa, const Void& v, Removal& R) {
+  const double cx = v.x, cy = v.y, rad = v.r;
+  const long a0 = S.a0, b0 = S.b0, na = S.na, nb = S.nb;
+  const double cb0 = std::floor((cy - rad - oy) / d), cb1 = std::floor((cy + rad - oy) / d);
+  const long bl = static_cast<long>(std::max(cb0, double(b0))), bh = static_cast<long>(std::min(cb1, double(b0 + nb - 1)));
+  for (long b = bl; b <= bh; ++b) {
+    const double py = oy + (b + 0.5) * d;
+    const double half = std::sqrt(std::max(0.0, rad * rad - (py - cy) * (py - cy)));
+    double ca0 = std::floor((cx - half - ox) / d), ca1 = std::floor((cx + half - ox) / d);
+    const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * d;  // the chord spans the period
+    if (whole_row) {
+      ca0 = double(a0);
+      ca1 = double(a0 + pa - 1);
+    } else if (pa == 0) {
+      ca0 = std::max(ca0, double(a0));
+      ca1 = std::min(ca1, double(a0 + na - 1));
+    }
+    for (long a = static_cast<long>(ca0); a <= static_cast<long>(ca1); ++a) {
+      const double px = ox + (a + 0.5) * d;
+      if (!whole_row && (px - cx) * (px - cx) + (py - cy) * (py - cy) >= rad * rad) continue;
+      long aa = a;
+      if (pa > 0) aa = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
+      if (aa < a0 || aa >= a0 + na) continue;
+      const std::int64_t i = S.site[static_cast<std::size_t>((b - b0) * na + (aa - a0))];
+      if (i >= 0 && !R.removed[static_cast<std::size_t>(i)]) {
+        R.removed[static_cast<std::size_t>(i)] = 1;
+        ++R.count;
+      }
+    }
+  }
+}
+
+// The points of P not removed, in their order.
+Particles keep_unremoved(const Particles& P, const Removal& R) {
+  Particles Q;
+  Q.resize(P.size() - R.count);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < P.size(); ++i) {
+    if (R.removed[i]) continue;
+    Q.x[k] = P.x[i]; Q.y[k] = P.y[i]; Q.vx[k] = P.vx[i]; Q.vy[k] = P.vy[i];
+    Q.m[k] = P.m[i]; Q.V[k] = P.V[i]; Q.body[k] = P.body[i];
+    ++k;
+  }
+  return Q;
+}
+
+}  // namespace
+
 PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1,
                        const VoidSpec& spec, double period) {
   const bool listed = !spec.centers.empty();
@@ -18,19 +100,9 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
   if (!listed && (spec.porosity < 0.0) == (spec.count < 0))
     throw std::invalid_argument("give either a target porosity or a void count");
   const std::size_t n = P.size();
-  // lattice index of every point: points sit at sub-cell centres (a + 1/2) d
-  const long a0 = static_cast<long>(std::floor((x0 - ox) / d)), b0 = static_cast<long>(std::floor((y0 - oy) / d));
-  const long na = static_cast<long>(std::ceil((x1 - ox) / d)) - a0 + 1;
-  const long nb = static_cast<long>(std::ceil((y1 - oy) / d)) - b0 + 1;
-  std::vector<std::int64_t> site(static_cast<std::size_t>(na * nb), -1);
-  for (std::size_t i = 0; i < n; ++i) {
-    const long a = static_cast<long>(std::floor((P.x[i] - ox) / d)) - a0;
-    const long b = static_cast<long>(std::floor((P.y[i] - oy) / d)) - b0;
-    if (a < 0 || a >= na || b < 0 || b >= nb) throw std::logic_error("cut_voids: point outside the body rectangle");
-    site[static_cast<std::size_t>(b * na + a)] = static_cast<std::int64_t>(i);
-  }
-  std::vector<char> removed(n, 0);
-  std::size_t nremoved = 0;
+  const SiteIndex S = index_sites(P, d, ox, oy, x0, x1, y0, y1);
+  Removal R;
+  R.removed.assign(n, 0);
   std::mt19937_64 rng(spec.seed);
   std::uniform_real_distribution<double> ux(x0, x1), uy(y0, y1), ur(spec.radius - spec.radius_spread,
                                                                      spec.radius + spec.radius_spread);
@@ -39,59 +111,20 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
   const long max_voids = listed ? static_cast<long>(spec.centers.size())
                                 : std::min(spec.count >= 0 ? spec.count : spec.max_voids, spec.max_voids);
   while (r.voids < max_voids) {
-    if (!listed && spec.porosity >= 0.0 && static_cast<double>(nremoved) >= spec.porosity * static_cast<double>(n)) break;
-    if (!listed && spec.porosity >= 0.0 && nremoved == n) break;
-    double cx, cy, rad;
+    if (!listed && spec.porosity >= 0.0 && static_cast<double>(R.count) >= spec.porosity * static_cast<double>(n)) break;
+    if (!listed && spec.porosity >= 0.0 && R.count == n) break;
+    Void v;
     if (listed) {
-      const Void& v = spec.centers[static_cast<std::size_t>(r.voids)];
-      cx = v.x; cy = v.y; rad = v.r;
+      v = spec.centers[static_cast<std::size_t>(r.voids)];
     } else {
-      cx = ux(rng); cy = uy(rng); rad = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
+      v.x = ux(rng); v.y = uy(rng); v.r = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
     }
     ++r.voids;
-    r.cut.push_back({cx, cy, rad});
-    // the void's rows within the body, and in each row its columns within the body (or within
-    // one period): a void far larger than the body costs no more than the body
-    const double cb0 = std::floor((cy - rad - oy) / d), cb1 = std::floor((cy + rad - oy) / d);
-    const long bl = static_cast<long>(std::max(cb0, double(b0))), bh = static_cast<long>(std::min(cb1, double(b0 + nb - 1)));
-    for (long b = bl; b <= bh; ++b) {
-      const double py = oy + (b + 0.5) * d;
-      const double half = std::sqrt(std::max(0.0, rad * rad - (py - cy) * (py - cy)));
-      double ca0 = std::floor((cx - half - ox) / d), ca1 = std::floor((cx + half - ox) / d);
-      const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * d;  // the chord spans the period
-      if (whole_row) {
-        ca0 = double(a0);
-        ca1 = double(a0 + pa - 1);
-      } else if (pa == 0) {
-        ca0 = std::max(ca0, double(a0));
-        ca1 = std::min(ca1, double(a0 + na - 1));
-      }
-      for (long a = static_cast<long>(ca0); a <= static_cast<long>(ca1); ++a) {
-        const double px = ox + (a + 0.5) * d;
-        if (!whole_row && (px - cx) * (px - cx) + (py - cy) * (py - cy) >= rad * rad) continue;
-        long aa = a;
-        if (pa > 0) aa = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
-        if (aa < a0 || aa >= a0 + na) continue;
-        const std::int64_t i = site[static_cast<std::size_t>((b - b0) * na + (aa - a0))];
-        if (i >= 0 && !removed[static_cast<std::size_t>(i)]) {
-          removed[static_cast<std::size_t>(i)] = 1;
-          ++nremoved;
-        }
-      }
-    }
+    r.cut.push_back(v);
+    remove_in_void(S, d, ox, oy, pa, v, R);
   }
-  r.porosity = n ? static_cast<double>(nremoved) / static_cast<double>(n) : 0.0;
-  // compact, keeping order
-  Particles Q;
-  Q.resize(n - nremoved);
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (removed[i]) continue;
-    Q.x[k] = P.x[i]; Q.y[k] = P.y[i]; Q.vx[k] = P.vx[i]; Q.vy[k] = P.vy[i];
-    Q.m[k] = P.m[i]; Q.V[k] = P.V[i]; Q.body[k] = P.body[i];
-    ++k;
-  }
-  P = std::move(Q);
+  r.porosity = n ? static_cast<double>(R.count) / static_cast<double>(n) : 0.0;
+  P = keep_unremoved(P, R);
   return r;
 }
 
