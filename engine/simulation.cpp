@@ -29,8 +29,33 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
       grid_(geom, cfg.transfer == Transfer::FLIP, cfg.fields(), cfg.contact) {
   if (geom.tile < 4 || geom.tile > kern::kMaxTile)
     throw std::invalid_argument("grid tile width must be 4 to " + std::to_string(kern::kMaxTile) + " cells");
-  const std::size_t n = P_.size();
   P_.enable_affine(cfg_.transfer == Transfer::APIC);
+  assign_velocity_fields();
+  enable_optional_fields();
+  resolve_strain_rate();
+  // ids name particles in messages and snapshots: their order as given
+  for (std::size_t i = 0; i < P_.size(); ++i) P_.id[i] = static_cast<std::uint32_t>(i);
+  allocate_work_arrays();
+  for (const auto& m : materials_) thermo_.emplace_back(m);
+  if (cfg_.heat_conduction) setup_heat_conduction();
+  double mmax = 0.0;
+  for (double m : P_.m) mmax = std::max(mmax, m);
+  mass_eps_ = 1e-9 * mmax;
+  // first time step from the initial state
+  max_speed_ = 0.0;
+  auto pv = P_.view();
+  for (std::size_t k = 0; k < materials_.size(); ++k) {
+    const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
+    with_material(materials_[k], [&](const auto& eos, const auto& str) {
+      max_speed_ = std::max(max_speed_, kern::max_signal_speed(pv, P_.size(), eos, str, sel));
+    });
+  }
+}
+
+// The velocity field of each point (Particles::field): its body with two-body contact, the side
+// of its void (set by the scene) with separated void faces; none with one field.
+void Simulation::assign_velocity_fields() {
+  const std::size_t n = P_.size();
   if (cfg_.contact) {
     if (body_material_.size() != 2)
       throw std::invalid_argument("multi-body contact needs exactly two bodies (one velocity field each), got " +
@@ -51,7 +76,11 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
                                     std::to_string(cfg_.void_face_fields) + " velocity fields");
   }
   if (cfg_.fields() == 1) std::vector<std::uint8_t>().swap(P_.field);
-  // optional fields: only what the materials and solver settings need
+}
+
+// The optional particle fields: only what the materials and solver settings need.
+void Simulation::enable_optional_fields() {
+  const std::size_t n = P_.size();
   bool energy = false, plastic = false, stored_work = false;
   for (const auto& m : materials_) {
     energy = energy || m.needs_energy();
@@ -62,7 +91,11 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   Particles::enable(P_.epsp, n, plastic);
   Particles::enable(P_.q, n, cfg_.artificial_viscosity);
   Particles::enable(P_.wp, n, stored_work);
-  // the mid-step strain rate needs the heating gather (APIC or FLIP with an energy field), USL
+}
+
+// The rate whose work goes into the energy (StrainRate): the mid-step one needs the heating
+// gather (APIC or FLIP with an energy field) and USL.
+void Simulation::resolve_strain_rate() {
   if (cfg_.fields() > 2 && !(transfer_heat() && cfg_.transfer == Transfer::APIC))
     throw std::invalid_argument("four void-face velocity fields (contact.void_face_fields = 4) need transfer 'apic' and "
                                 "an energy field (a Mie-Grueneisen material or heat conduction): their weld takes APIC's "
@@ -76,8 +109,13 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   // kinematics take the updated L)
   const bool mid_default = cfg_.shape != kern::ShapeKind::Linear;
   midstep_ = can_mid && (cfg_.strain_rate == StrainRate::Midstep || (cfg_.strain_rate == StrainRate::Auto && mid_default));
-  // ids name particles in messages and snapshots: their order as given
-  for (std::size_t i = 0; i < n; ++i) P_.id[i] = static_cast<std::uint32_t>(i);
+}
+
+// The binning, the per-line sums of the grid passes, the node states of the void-face merge
+// and the material selections, sized once.
+void Simulation::allocate_work_arrays() {
+  const auto& geom = grid_.geom;
+  const std::size_t n = P_.size();
   key_.resize(n);
   order_.resize(n);
   cell_start_.resize(geom.num_keys() + 1);
@@ -88,43 +126,34 @@ Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std:
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;
-  for (const auto& m : materials_) thermo_.emplace_back(m);
-  if (cfg_.heat_conduction) {
-    // one conductivity for the scene; nodes with less than half a cell of the lightest
-    // material's full mass carry no heat (kernels/heat.hpp), which bounds the explicit step
-    cv_body_.assign(256, 0.0);
-    double cmin = std::numeric_limits<double>::infinity();
-    for (std::size_t b = 0; b < body_material_.size(); ++b) {
-      const Material& m = materials_[body_material_[b]];
-      if (m.cv <= 0.0 || m.conductivity <= 0.0)
-        throw std::invalid_argument("heat conduction needs specific_heat and thermal_conductivity > 0 for material " + m.name);
-      if (conductivity_ > 0.0 && m.conductivity != conductivity_)
-        throw std::invalid_argument("heat conduction: all materials must share one thermal_conductivity");
-      conductivity_ = m.conductivity;
-      cv_body_[b] = m.cv;
-      cmin = std::min(cmin, 0.5 * m.rho0 * geom.h * geom.h * m.cv);
-    }
-    heat_cmin_ = cmin;
-    heat_dt_ = 0.9 * cmin / (4.0 * conductivity_);
-    grid_.enable_heat();
-    // relaxation of sub-cell temperature structure (kernels/heat.hpp): time 10 h^2 / alpha
-    double alpha = 0.0;
-    for (const auto& m : materials_) alpha = std::max(alpha, m.conductivity / (m.rho0 * m.cv));
-    heat_relax_rate_ = alpha / (10.0 * geom.h * geom.h);
-    T_.assign(n, 0.0);
+}
+
+// One conductivity for the scene; nodes with less than half a cell of the lightest material's
+// full mass carry no heat (kernels/heat.hpp), which bounds the explicit step.
+void Simulation::setup_heat_conduction() {
+  const double h = grid_.geom.h;
+  cv_body_.assign(256, 0.0);
+  double cmin = std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < body_material_.size(); ++b) {
+    const Material& m = materials_[body_material_[b]];
+    if (m.cv <= 0.0 || m.conductivity <= 0.0)
+      throw std::invalid_argument("heat conduction needs specific_heat and thermal_conductivity > 0 for material " + m.name);
+    if (conductivity_ > 0.0 && m.conductivity != conductivity_)
+      throw std::invalid_argument("heat conduction: all materials must share one thermal_conductivity");
+    conductivity_ = m.conductivity;
+    cv_body_[b] = m.cv;
+    double c = 0.5 * m.rho0;  // half a cell's mass, 0.5 rho0 h^kDim, times cv
+    for (int d = 0; d < kern::kDim; ++d) c *= h;
+    cmin = std::min(cmin, c * m.cv);
   }
-  double mmax = 0.0;
-  for (double m : P_.m) mmax = std::max(mmax, m);
-  mass_eps_ = 1e-9 * mmax;
-  // first time step from the initial state
-  max_speed_ = 0.0;
-  auto pv = P_.view();
-  for (std::size_t k = 0; k < materials_.size(); ++k) {
-    const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
-    with_material(materials_[k], [&](const auto& eos, const auto& str) {
-      max_speed_ = std::max(max_speed_, kern::max_signal_speed(pv, n, eos, str, sel));
-    });
-  }
+  heat_cmin_ = cmin;
+  heat_dt_ = 0.9 * cmin / (2.0 * kern::kDim * conductivity_);
+  grid_.enable_heat();
+  // relaxation of sub-cell temperature structure (kernels/heat.hpp): time 10 h^2 / alpha
+  double alpha = 0.0;
+  for (const auto& m : materials_) alpha = std::max(alpha, m.conductivity / (m.rho0 * m.cv));
+  heat_relax_rate_ = alpha / (10.0 * h * h);
+  T_.assign(P_.size(), 0.0);
 }
 
 kern::ParticleView Simulation::pview() {

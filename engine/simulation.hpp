@@ -106,6 +106,12 @@ class Simulation {
   std::size_t bytes() const;
 
  private:
+  // the constructor's parts
+  void assign_velocity_fields();
+  void enable_optional_fields();
+  void resolve_strain_rate();
+  void allocate_work_arrays();
+  void setup_heat_conduction();
   // the phases of step()
   void bin_particles();  // sort_by_cell, the occupied box, the periodic physical permutation
   void scatter_to_grid();
