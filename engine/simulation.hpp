@@ -170,7 +170,7 @@ class Simulation {
 
   // heat conduction
   std::vector<Thermo> thermo_;
-  std::vector<double> heat_cap_, heat_capT_, heat_T_, heat_dT_, T_, cv_body_;
+  std::vector<double> T_, cv_body_;  // particle temperatures [K], cv per body [J/(kg K)]
   double conductivity_ = 0.0, heat_cmin_ = 0.0, heat_relax_rate_ = 0.0;
   double heat_dt_ = std::numeric_limits<double>::infinity();
   double mass_eps_ = 0.0;  // grid nodes lighter than this get no force (see GridUpdateParams)
