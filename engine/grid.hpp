@@ -88,8 +88,8 @@ struct Grid {
   static double* opt(std::vector<double>& a) { return a.empty() ? nullptr : a.data(); }
   std::vector<std::vector<double>*> storage(NodeArray n) {
     std::vector<std::vector<double>*> s;
-    const auto axes = [&](Axes& x) {
-      for (auto& a : x) s.push_back(&a);
+    const auto axes = [&](Axes& arr) {
+      for (auto& a : arr) s.push_back(&a);
     };
     switch (n) {
       case NodeArray::Mass: s.push_back(&m); break;

@@ -441,7 +441,7 @@ void Simulation::conduct_heat() {
   const kern::HeatGrid H{grid_.cap.data(), grid_.capT.data(), grid_.T.data(), grid_.dT.data()};
   const auto pv = P_.view();
   kern::HeatParticles hp{{}, P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(), P_.e.data()};
-  for (int d = 0; d < kern::kDim; ++d) hp.x[d] = pv.pos(d);
+  for (int d = 0; d < kern::kDim; ++d) hp.pos[d] = pv.pos(d);
   std::fill(grid_.cap.begin(), grid_.cap.end(), 0.0);
   std::fill(grid_.capT.begin(), grid_.capT.end(), 0.0);
   // the particles moved in this step: sort them again for the scatter

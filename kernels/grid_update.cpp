@@ -262,15 +262,15 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
     weld_fields(g, box, G, q, vmin, row_loss);
     return;
   }
-  const NodeBox bx = real_nodes(g, box);
+  const NodeBox nb = real_nodes(g, box);
   const std::size_t fs = G.fstride;
-  const int lines = bx.lines();
+  const int lines = nb.lines();
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = bx.line_start(r);
+    Idx<kDim> i = nb.line_start(r);
     const int line = g.line(i);
     double row = 0.0;
-    for (i[0] = bx.lo[0]; i[0] <= bx.hi[0]; ++i[0]) {
+    for (i[0] = nb.lo[0]; i[0] <= nb.hi[0]; ++i[0]) {
       const std::size_t a = g.node(i), b = a + fs;
       G.heat[a] = G.heat[b] = 0.0;
       const double m0 = G.m[a], m1 = G.m[b];

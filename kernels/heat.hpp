@@ -32,7 +32,7 @@ struct HeatGrid {
 };
 
 struct HeatParticles {
-  const double* x[kDim];    // position [m]
+  const double* pos[kDim];  // position [m]
   const double* m;
   const double* T;          // temperature [K]
   const std::uint8_t* body;
@@ -44,9 +44,9 @@ struct HeatParticles {
 template <class Shape>
 SMPM_INLINE Stencil<Shape, kDim> heat_stencil(const GridGeom& g, const HeatParticles& P, std::size_t p, double lp) {
   const double inv_h = 1.0 / g.h;
-  Vec<kDim> xg;
-  for (int d = 0; d < kDim; ++d) xg[d] = (P.x[d][p] - g.origin(d)) * inv_h;
-  return Stencil<Shape, kDim>(xg, lp);
+  Vec<kDim> u;
+  for (int d = 0; d < kDim; ++d) u[d] = (P.pos[d][p] - g.origin(d)) * inv_h;
+  return Stencil<Shape, kDim>(u, lp);
 }
 
 template <class Shape>

@@ -1,4 +1,4 @@
-// Shape functions, evaluated per axis in grid units (xg = (x - x0) / h).
+// Shape functions, evaluated per axis in grid units (t = (x - x0) / h).
 // eval() returns the first node of the support and fills w[N] (weights) and dw[N]
 // (derivatives dN/dxg, i.e. gradients in grid units: divide by h for 1/m).
 // One templated P2G / G2P code path serves all of them (kernels/transfer.hpp).
@@ -19,9 +19,9 @@ struct Linear {
   static constexpr bool apic_gradient = true;
   static constexpr const char* name = "linear";
   static constexpr bool constant_D = false;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
-  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
-    const double b = std::floor(xg);
-    const double f = xg - b;
+  SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(t);
+    const double f = t - b;
     w[0] = 1.0 - f;
     w[1] = f;
     dw[0] = -1.0;
@@ -55,12 +55,12 @@ struct UGIMP {
       dw = 0.0;
     }
   }
-  SMPM_INLINE static int eval(double xg, double lp, double* w, double* dw) {
-    const int b = static_cast<int>(std::floor(xg - lp));
+  SMPM_INLINE static int eval(double t, double lp, double* w, double* dw) {
+    const int b = static_cast<int>(std::floor(t - lp));
 #pragma GCC unroll 4
     for (int a = 0; a < N; ++a) {
-      // d = xg - x_node; dN/dxg = dS/dd.
-      one(xg - (b + a), lp, w[a], dw[a]);
+      // d = t - x_node; dN/dxg = dS/dd.
+      one(t - (b + a), lp, w[a], dw[a]);
     }
     return b;
   }
@@ -72,9 +72,9 @@ struct QuadraticBSpline {
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "quadratic";
   static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
-  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
-    const double b = std::floor(xg - 0.5);
-    const double f = xg - b;  // in [0.5, 1.5)
+  SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(t - 0.5);
+    const double f = t - b;  // in [0.5, 1.5)
     const double a0 = 1.5 - f, a1 = f - 1.0, a2 = f - 0.5;
     w[0] = 0.5 * a0 * a0;
     w[1] = 0.75 - a1 * a1;
@@ -92,9 +92,9 @@ struct CubicBSpline {
   static constexpr bool apic_gradient = false;
   static constexpr const char* name = "cubic";
   static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
-  SMPM_INLINE static int eval(double xg, double /*lp*/, double* w, double* dw) {
-    const double b = std::floor(xg) - 1.0;
-    const double f = xg - b;  // in [1, 2)
+  SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
+    const double b = std::floor(t) - 1.0;
+    const double f = t - b;  // in [1, 2)
     const double d1 = f - 1.0;  // in [0, 1)
     const double d2 = 2.0 - f;  // |d| for node 2, in (0, 1]
     const double q0 = 2.0 - f;  // 2 - |d0|

@@ -17,11 +17,11 @@ std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::si
     std::uint32_t* __restrict kl = key;
 #pragma omp for simd schedule(static) reduction(min : bad)
     for (std::size_t i = 0; i < n; ++i) {
-      double x[kDim];
+      double pt[kDim];
 #pragma GCC unroll 3
-      for (int d = 0; d < kDim; ++d) x[d] = pl[d][i];
+      for (int d = 0; d < kDim; ++d) pt[d] = pl[d][i];
       std::uint32_t k;
-      const bool inside = cell_key(gl, x, k);
+      const bool inside = cell_key(gl, pt, k);
       kl[i] = k;
       bad = std::min(bad, inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
     }

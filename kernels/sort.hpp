@@ -32,12 +32,12 @@ struct KeyGeom {
 // cell even at a cell edge, which the colored scatter's tile halo relies on. Branch-free, so
 // compute_keys vectorizes. Returns false (key then holds the key of cell 0) when the point is
 // outside the grid's cells [origin, origin + n h) on some axis, or NaN.
-SMPM_INLINE bool cell_key(const KeyGeom& g, const double* x, std::uint32_t& key) {
+SMPM_INLINE bool cell_key(const KeyGeom& g, const double* pt, std::uint32_t& key) {
   double xg[kDim];
   bool inside = true;
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) {
-    xg[d] = (x[d] - g.origin[d]) * g.inv_h;
+    xg[d] = (pt[d] - g.origin[d]) * g.inv_h;
     inside = inside & (xg[d] >= 0.0) & (xg[d] < g.n[d]);  // also rejects NaN
   }
   double t = 0.0, l = 0.0;  // tile index, cell index inside the tile

@@ -23,11 +23,11 @@ struct Stencil {
   int base[D];                                 // first node per axis
   double w[D][N], dw[D][N];                    // 1D weights and derivatives per axis
 
-  SMPM_INLINE Stencil(const Vec<D>& x, double lp) {
+  SMPM_INLINE Stencil(const Vec<D>& pos, double lp) {
 #pragma GCC unroll 3
     for (int d = 0; d < D; ++d) {
-      xg[d] = x[d];
-      base[d] = Shape::eval(x[d], lp, w[d], dw[d]);
+      xg[d] = pos[d];
+      base[d] = Shape::eval(pos[d], lp, w[d], dw[d]);
     }
   }
   // node offsets a[d] of the k-th node in storage order (x fastest)

@@ -98,10 +98,10 @@ struct TileSink {
 
 // A point's position in grid units, (x - origin) * (1 / h) per axis.
 SMPM_INLINE Vec<kDim> grid_units(const GridGeom& g, const ParticleView& P, std::size_t p, double inv_h) {
-  Vec<kDim> xg;
+  Vec<kDim> u;
 #pragma GCC unroll 3
-  for (int d = 0; d < kDim; ++d) xg[d] = (P.pos(d)[p] - g.origin(d)) * inv_h;
-  return xg;
+  for (int d = 0; d < kDim; ++d) u[d] = (P.pos(d)[p] - g.origin(d)) * inv_h;
+  return u;
 }
 // The stencil's node i (its offsets a) as grid indices.
 template <class St>
@@ -421,11 +421,11 @@ SMPM_INLINE void move_point(const GridGeom& g, const ParticleView& P, std::size_
                             const double* v) {
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) {
-    double x = P.pos(d)[p] + q.dt * v[d];
+    double c = P.pos(d)[p] + q.dt * v[d];
     const double o = g.origin(d), L = g.periodic(d) ? g.cells(d) * g.h : 0.0;
-    x = x < o ? x + L : x;
-    x = x >= o + L ? x - L : x;
-    P.pos(d)[p] = std::min(std::max(x, q.lo[d]), q.hi[d]);
+    c = c < o ? c + L : c;
+    c = c >= o + L ? c - L : c;
+    P.pos(d)[p] = std::min(std::max(c, q.lo[d]), q.hi[d]);
   }
 }
 
