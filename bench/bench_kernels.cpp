@@ -16,6 +16,8 @@
 // velocities, velocity gradients and stresses, and the particle arrays physically sorted by
 // tile and cell (Particles::permute with the counting-sort order) as the engine keeps them.
 #include <benchmark/benchmark.h>
+
+#include <array>
 #include <omp.h>
 
 #include <algorithm>
@@ -40,6 +42,7 @@
 #include "kernels/transfer.hpp"
 
 namespace {
+
 
 using namespace smpm;
 
@@ -82,9 +85,17 @@ double wave_speed() {
 
 double cfl_dt() { return kCfl * kH / wave_speed(); }
 
+// the coordinate arrays of the particles, per axis (kern::compute_keys)
+std::array<const double*, kern::kDim> positions(smpm::Particles& P) {
+  const auto v = P.view();
+  std::array<const double*, kern::kDim> a{};
+  for (int d = 0; d < kern::kDim; ++d) a[d] = v.pos(d);
+  return a;
+}
+
 kern::Walls slip_box() {
   kern::Walls w;
-  w.left = w.right = w.bottom = w.top = kern::Wall::Slip;
+  for (int d = 0; d < kern::kDim; ++d) w.lo[d] = w.hi[d] = kern::Wall::Slip;
   return w;
 }
 
@@ -110,7 +121,7 @@ bool sort_particles(const kern::GridGeom& g, Particles& P) {
   const std::size_t n = P.size();
   std::vector<std::uint32_t> key(n), order(n), cell_start(g.num_keys() + 1);
   std::vector<std::uint32_t> hist(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
-  if (kern::compute_keys(g, P.x.data(), P.y.data(), n, key.data()) >= 0) return false;
+  if (kern::compute_keys(g, positions(P).data(), n, key.data()) >= 0) return false;
   kern::counting_sort(key.data(), n, g.num_keys(), hist.data(), cell_start.data(), order.data());
   std::vector<double> sd;
   std::vector<std::uint32_t> su;
@@ -180,7 +191,7 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   s->order.resize(n);
   s->cell_start.resize(g.num_keys() + 1);
   s->hist.resize(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
-  kern::compute_keys(g, P.x.data(), P.y.data(), n, s->key.data());
+  kern::compute_keys(g, positions(P).data(), n, s->key.data());
   kern::counting_sort(s->key.data(), n, g.num_keys(), s->hist.data(), s->cell_start.data(), s->order.data());
   s->grid = Grid(g, false);
   s->row_force.assign(kern::kRowSlots * static_cast<std::size_t>(g.sy()), 0.0);
@@ -236,7 +247,7 @@ void BM_Sort(benchmark::State& state) {
   const std::size_t n = s->P.size();
   const kern::GridGeom& g = s->g;
   for (auto _ : state) {
-    const auto bad = kern::compute_keys(g, s->P.x.data(), s->P.y.data(), n, s->key.data());
+    const auto bad = kern::compute_keys(g, positions(s->P).data(), n, s->key.data());
     benchmark::DoNotOptimize(bad);
     kern::counting_sort(s->key.data(), n, g.num_keys(), s->hist.data(), s->cell_start.data(), s->order.data());
     benchmark::ClobberMemory();
@@ -276,7 +287,7 @@ void BM_GridUpdate(benchmark::State& state) {
   const kern::GridGeom& g = s->g;
   auto G = s->grid.view();
   const auto q = grid_params();
-  double* arrays[] = {G.vx, G.vy};
+  double* arrays[] = {G.v[0], G.v[1]};
   for (auto _ : state) {
     kern::grid_update(g, g.all_nodes(), G, q, s->row_force.data());
     kern::fill_periodic_ghosts(g, g.all_nodes(), arrays, 2);

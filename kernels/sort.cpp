@@ -12,18 +12,17 @@ std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::si
   {
     // thread-local geometry and pointers (through the shared ones GCC reloads them per point)
     const KeyGeom gl(g);
-    const double* pl[kDim];
+    const double* __restrict pl[kDim];
     for (int d = 0; d < kDim; ++d) pl[d] = pos[d];
     std::uint32_t* __restrict kl = key;
 #pragma omp for simd schedule(static) reduction(min : bad)
     for (std::size_t i = 0; i < n; ++i) {
-      double pt[kDim];
+      Vec<kDim> pt;
 #pragma GCC unroll 3
       for (int d = 0; d < kDim; ++d) pt[d] = pl[d][i];
-      std::uint32_t k;
-      const bool inside = cell_key(gl, pt, k);
-      kl[i] = k;
-      bad = std::min(bad, inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
+      const CellKey k = cell_key(gl, pt);
+      kl[i] = k.key;
+      bad = std::min(bad, k.inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
     }
   }
   return bad == static_cast<std::ptrdiff_t>(n) ? -1 : bad;

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "tensor.hpp"
 #include "views.hpp"
 
 namespace smpm::kern {
@@ -14,6 +15,7 @@ namespace smpm::kern {
 // (every value is an integer below 2^32) and the vector units do it without conversions; and
 // no integer division (GridGeom::tiles) left in the loop, which GCC does not hoist.
 struct KeyGeom {
+  // per axis: origin [m], cells, tiles
   double origin[kDim], n[kDim], tiles[kDim];
   double inv_h, tile, inv_tile, cells_per_tile;
   explicit KeyGeom(const GridGeom& g)
@@ -26,32 +28,40 @@ struct KeyGeom {
   }
 };
 
-// Key of the cell holding point x: tile-major (tiles numbered with x fastest), then the cell
+// Key of the cell holding point pt: tile-major (tiles numbered with x fastest), then the cell
 // inside the tile (x fastest). Grid units are (x - origin) * (1 / h), the same expression as the
 // transfers' (kernels/transfer.hpp): a key and a stencil computed from one position agree on its
-// cell even at a cell edge, which the colored scatter's tile halo relies on. Branch-free, so
-// compute_keys vectorizes. Returns false (key then holds the key of cell 0) when the point is
-// outside the grid's cells [origin, origin + n h) on some axis, or NaN.
-SMPM_INLINE bool cell_key(const KeyGeom& g, const double* pt, std::uint32_t& key) {
-  double xg[kDim];
+// cell even at a cell edge, which the colored scatter's tile halo relies on. Every value is an
+// integer below 2^32, so the arithmetic in doubles is exact. Branch-free, so compute_keys
+// vectorizes; the point comes by value and the result is returned (a pointer to a local array
+// or an output reference inside the `omp simd` loop kept it scalar and 6x slower). inside is
+// false (key then that of cell 0) when the point is outside the grid's cells
+// [origin, origin + n h) on some axis, or NaN.
+struct CellKey {
+  std::uint32_t key;
+  bool inside;
+};
+SMPM_INLINE CellKey cell_key(const KeyGeom& g, const Vec<kDim> pt) {
+  double u[kDim], c[kDim], t[kDim];
   bool inside = true;
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) {
-    xg[d] = (pt[d] - g.origin[d]) * g.inv_h;
-    inside = inside & (xg[d] >= 0.0) & (xg[d] < g.n[d]);  // also rejects NaN
+    u[d] = (pt[d] - g.origin[d]) * g.inv_h;
+    inside = inside & (u[d] >= 0.0) & (u[d] < g.n[d]);  // also rejects NaN
   }
-  double t = 0.0, l = 0.0;  // tile index, cell index inside the tile
 #pragma GCC unroll 3
-  for (int d = kDim - 1; d >= 0; --d) {
-    const double c = inside ? std::trunc(xg[d]) : 0.0;
-    double td = std::trunc(c * g.inv_tile);
-    td = (td + 1.0) * g.tile <= c ? td + 1.0 : td;  // c * (1 / tile) may round below an integer
-    t = d == kDim - 1 ? td : t * g.tiles[d] + td;
-    const double ld = c - td * g.tile;
-    l = d == kDim - 1 ? ld : l * g.tile + ld;
+  for (int d = 0; d < kDim; ++d) c[d] = inside ? std::trunc(u[d]) : 0.0;
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) t[d] = std::trunc(c[d] * g.inv_tile);
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) t[d] = (t[d] + 1.0) * g.tile <= c[d] ? t[d] + 1.0 : t[d];  // c / tile may round below an integer
+  double tile = t[kDim - 1], cell = c[kDim - 1] - t[kDim - 1] * g.tile;
+#pragma GCC unroll 3
+  for (int d = kDim - 2; d >= 0; --d) {
+    tile = tile * g.tiles[d] + t[d];
+    cell = cell * g.tile + (c[d] - t[d] * g.tile);
   }
-  key = static_cast<std::uint32_t>(t * g.cells_per_tile + l);
-  return inside;
+  return {static_cast<std::uint32_t>(tile * g.cells_per_tile + cell), inside};
 }
 
 // Computes key[i] for every particle, pos[d] its coordinate arrays. Returns the lowest index of

@@ -459,9 +459,10 @@ SMPM_INLINE void store_gradient(const GatherSums& S, double inv_h, const Gradien
 // The node loop of g2p_particle: every sum its template arguments ask for, node by node in
 // storage order. u, uC: the point's old velocity and C h (the heating gather's scatter loss).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip, bool WorkRate>
-SMPM_INLINE void gather_sums(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st, std::size_t foff,
-                             double mid, const double* u, const double (*uC)[kDim], GatherSums& S) {
+SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st,
+                                   std::size_t foff, double mid, const Vec<kDim> u, const Mat<kDim> uC) {
   constexpr int D = kDim;
+  GatherSums S;
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   st.for_each([&](const Idx<D>& a, int) {
@@ -488,7 +489,7 @@ SMPM_INLINE void gather_sums(const GridGeom& g, const GridView& G, const Stencil
         } else {  // px, py hold the scatter's velocity p / m here
           r[d] = u[d];
 #pragma GCC unroll 3
-          for (int c = 0; c < D; ++c) r[d] += uC[d][c] * st.offset(a, c);
+          for (int c = 0; c < D; ++c) r[d] += uC(d, c) * st.offset(a, c);
           r[d] -= G.p[d][n];
         }
       }
@@ -518,6 +519,7 @@ SMPM_INLINE void gather_sums(const GridGeom& g, const GridView& G, const Stencil
         for (int c = 0; c < D; ++c) S.B[r][c] += w * gv[r] * st.offset(a, c);
     }
   });
+  return S;
 }
 
 // The affine field's kinetic energy per unit mass, sum_ab C_ab^2 D_b [grid units], C and the
@@ -585,21 +587,21 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
                 "transfer heating is defined for the APIC velocity gather and the FLIP USL gather");
   const double inv_h = 1.0 / g.h;
   const Stencil<Shape, D> st(grid_units(g, P, p, inv_h), q.lp);
-  double u[D] = {}, uC[D][D] = {};  // old v_p and C_p h
+  Vec<D> u{};  // old v_p and C_p h
+  Mat<D> uC{};
   if constexpr (Heat) {
 #pragma GCC unroll 3
     for (int r = 0; r < D; ++r) {
       u[r] = P.vel(r)[p];
       if constexpr (!FLIP)
 #pragma GCC unroll 3
-        for (int c = 0; c < D; ++c) uC[r][c] = P.affine(r, c)[p] * g.h;
+        for (int c = 0; c < D; ++c) uC(r, c) = P.affine(r, c)[p] * g.h;
     }
   }
   // with Contact the view always carries field_of (Simulation::pview): the lookup without
   // field()'s null test vectorizes
   const std::size_t foff = Contact ? static_cast<std::size_t>(P.field_of[p]) * G.fstride : 0;
-  GatherSums S;
-  gather_sums<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC, S);
+  const GatherSums S = gather_sums<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC);
   double Dn[D] = {}, C[D][D] = {}, affine = 0.0;  // inertia, C (grid units), affine energy
   if constexpr (kAffine) {
     if constexpr (!Shape::apic_gradient || Heat)
