@@ -137,6 +137,94 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
   return out;
 }
 
+namespace {
+
+// open_area's image: nx x ny pixels of px x pixel [m] from (bx0, by0), each 0 (uncovered), 1
+// (covered by a point's disk) or 2 (uncovered and connected to the border: outside the body).
+// wrap: x is periodic over the nx pixels.
+struct Raster {
+  double bx0, by0, px, pixel;
+  long nx, ny;
+  bool wrap;
+  std::vector<std::uint8_t> img;
+};
+
+// Marks the pixels whose centre lies in a body point's disk, radius * sqrt(V_p) capped at rmax.
+void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
+  const double bx0 = R.bx0, by0 = R.by0, px = R.px, pixel = R.pixel;
+  const long nx = R.nx, ny = R.ny;
+  for (std::size_t p = 0; p < P.size(); ++p) {
+    if (P.body[p] != body) continue;
+    const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
+    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.y[p] - rad - by0) / pixel - 0.5)));
+    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.y[p] + rad - by0) / pixel - 0.5)));
+    const long i0 = static_cast<long>(std::ceil((P.x[p] - rad - bx0) / px - 0.5));
+    const long i1 = static_cast<long>(std::floor((P.x[p] + rad - bx0) / px - 0.5));
+    for (long j = j0; j <= j1; ++j)
+      for (long i = i0; i <= i1; ++i) {
+        const double ex = bx0 + (i + 0.5) * px - P.x[p], ey = by0 + (j + 0.5) * pixel - P.y[p];
+        if (ex * ex + ey * ey > r2) continue;
+        long ii = i;
+        if (R.wrap) ii = ((ii % nx) + nx) % nx;
+        else if (ii < 0 || ii >= nx) continue;
+        R.img[static_cast<std::size_t>(j * nx + ii)] = 1;
+      }
+  }
+}
+
+// Floods the outside (2) from the border rows, and columns without wrap.
+void flood_outside(Raster& R) {
+  const long nx = R.nx, ny = R.ny;
+  std::vector<long> stack;
+  auto seed = [&](long i, long j) {
+    std::uint8_t& v = R.img[static_cast<std::size_t>(j * nx + i)];
+    if (v == 0) {
+      v = 2;
+      stack.push_back(j * nx + i);
+    }
+  };
+  for (long i = 0; i < nx; ++i) {
+    seed(i, 0);
+    seed(i, ny - 1);
+  }
+  if (!R.wrap)
+    for (long j = 0; j < ny; ++j) {
+      seed(0, j);
+      seed(nx - 1, j);
+    }
+  while (!stack.empty()) {
+    const long k = stack.back();
+    stack.pop_back();
+    const long i = k % nx, j = k / nx;
+    if (j > 0) seed(i, j - 1);
+    if (j < ny - 1) seed(i, j + 1);
+    if (R.wrap) {
+      seed((i + 1) % nx, j);
+      seed((i + nx - 1) % nx, j);
+    } else {
+      if (i > 0) seed(i - 1, j);
+      if (i < nx - 1) seed(i + 1, j);
+    }
+  }
+}
+
+// Adds the area of the void pixels (0) whose centre lies in each window to area[window] [m^2].
+void add_void_area(const Raster& R, const std::vector<Window>& windows, std::vector<double>& area) {
+  for (long j = 0; j < R.ny; ++j) {
+    const double yc = R.by0 + (j + 0.5) * R.pixel;
+    for (long i = 0; i < R.nx; ++i) {
+      if (R.img[static_cast<std::size_t>(j * R.nx + i)] != 0) continue;
+      const double xc = R.bx0 + (i + 0.5) * R.px;
+      for (std::size_t w = 0; w < windows.size(); ++w) {
+        const Window& W = windows[w];
+        if (yc >= W.y0 && yc <= W.y1 && xc >= W.x0 && xc <= W.x1) area[w] += R.px * R.pixel;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
                               double pixel, double radius, double period, double xp0) {
   std::vector<double> area(windows.size(), 0.0);
@@ -170,67 +258,10 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
   }
   const long nx = static_cast<long>(nxd), ny = static_cast<long>(nyd);
   const double px = (bx1 - bx0) / nxd;  // pixel width (wrap: the period tiles exactly)
-  std::vector<std::uint8_t> img(static_cast<std::size_t>(nx * ny), 0);  // 1 covered, 2 outside
-  for (std::size_t p = 0; p < P.size(); ++p) {
-    if (P.body[p] != body) continue;
-    const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
-    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.y[p] - rad - by0) / pixel - 0.5)));
-    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.y[p] + rad - by0) / pixel - 0.5)));
-    const long i0 = static_cast<long>(std::ceil((P.x[p] - rad - bx0) / px - 0.5));
-    const long i1 = static_cast<long>(std::floor((P.x[p] + rad - bx0) / px - 0.5));
-    for (long j = j0; j <= j1; ++j)
-      for (long i = i0; i <= i1; ++i) {
-        const double ex = bx0 + (i + 0.5) * px - P.x[p], ey = by0 + (j + 0.5) * pixel - P.y[p];
-        if (ex * ex + ey * ey > r2) continue;
-        long ii = i;
-        if (wrap) ii = ((ii % nx) + nx) % nx;
-        else if (ii < 0 || ii >= nx) continue;
-        img[static_cast<std::size_t>(j * nx + ii)] = 1;
-      }
-  }
-  // flood the outside from the border rows (and columns, without wrap)
-  std::vector<long> stack;
-  auto seed = [&](long i, long j) {
-    std::uint8_t& v = img[static_cast<std::size_t>(j * nx + i)];
-    if (v == 0) {
-      v = 2;
-      stack.push_back(j * nx + i);
-    }
-  };
-  for (long i = 0; i < nx; ++i) {
-    seed(i, 0);
-    seed(i, ny - 1);
-  }
-  if (!wrap)
-    for (long j = 0; j < ny; ++j) {
-      seed(0, j);
-      seed(nx - 1, j);
-    }
-  while (!stack.empty()) {
-    const long k = stack.back();
-    stack.pop_back();
-    const long i = k % nx, j = k / nx;
-    if (j > 0) seed(i, j - 1);
-    if (j < ny - 1) seed(i, j + 1);
-    if (wrap) {
-      seed((i + 1) % nx, j);
-      seed((i + nx - 1) % nx, j);
-    } else {
-      if (i > 0) seed(i - 1, j);
-      if (i < nx - 1) seed(i + 1, j);
-    }
-  }
-  for (long j = 0; j < ny; ++j) {
-    const double yc = by0 + (j + 0.5) * pixel;
-    for (long i = 0; i < nx; ++i) {
-      if (img[static_cast<std::size_t>(j * nx + i)] != 0) continue;
-      const double xc = bx0 + (i + 0.5) * px;
-      for (std::size_t w = 0; w < windows.size(); ++w) {
-        const Window& W = windows[w];
-        if (yc >= W.y0 && yc <= W.y1 && xc >= W.x0 && xc <= W.x1) area[w] += px * pixel;
-      }
-    }
-  }
+  Raster R{bx0, by0, px, pixel, nx, ny, wrap, std::vector<std::uint8_t>(static_cast<std::size_t>(nx * ny), 0)};
+  cover_disks(R, P, body, radius, rmax);
+  flood_outside(R);
+  add_void_area(R, windows, area);
   return area;
 }
 
