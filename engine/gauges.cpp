@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string_view>
 
 #include "engine/checkpoint.hpp"
+#include "engine/columns.hpp"
 #include "engine/diagnostics.hpp"
 #include "engine/simulation.hpp"
 
@@ -108,21 +110,55 @@ std::vector<double> PointRecorder::surface_velocity(const Simulation& sim) {
   return u;
 }
 
+namespace {
+
+// gauges.csv: one row per gauge at a time
+struct GaugeRow {
+  double t;  // [s]
+  std::string_view name;
+  const GaugeSample& g;
+};
+constexpr Column<GaugeRow> kGaugeColumns[] = {
+    {"time_ns", "ns", [](const GaugeRow& r) { return r.t * 1e9; }},
+    {"gauge", "name", nullptr, [](const GaugeRow& r) { return r.name; }},
+    {"x_um", "um", [](const GaugeRow& r) { return r.g.x * 1e6; }},
+    {"y_um", "um", [](const GaugeRow& r) { return r.g.y * 1e6; }},
+    {"vx_m_s", "m/s", [](const GaugeRow& r) { return r.g.vx; }},
+    {"vy_m_s", "m/s", [](const GaugeRow& r) { return r.g.vy; }},
+    {"sigma_xx_GPa", "GPa", [](const GaugeRow& r) { return r.g.sxx * 1e-9; }},
+    {"sigma_yy_GPa", "GPa", [](const GaugeRow& r) { return r.g.syy * 1e-9; }},
+    {"sigma_xy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sxy * 1e-9; }},
+    {"P_GPa", "GPa", [](const GaugeRow& r) { return r.g.P * 1e-9; }},
+    {"rho_g_cc", "g/cc", [](const GaugeRow& r) { return r.g.rho * 1e-3; }},
+    {"T_K", "K", [](const GaugeRow& r) { return r.g.T; }},
+};
+
+// freesurface.csv: one row per free surface at a time
+struct SurfaceRow {
+  double t;  // [s]
+  std::string_view body;
+  double u;  // [m/s]
+};
+constexpr Column<SurfaceRow> kSurfaceColumns[] = {
+    {"time_ns", "ns", [](const SurfaceRow& r) { return r.t * 1e9; }},
+    {"body", "name", nullptr, [](const SurfaceRow& r) { return r.body; }},
+    {"u_fs_m_s", "m/s", [](const SurfaceRow& r) { return r.u; }},
+};
+
+}  // namespace
+
+std::string PointRecorder::gauge_header() { return csv_header(kGaugeColumns); }
+std::string PointRecorder::surface_header() { return csv_header(kSurfaceColumns); }
+
 void PointRecorder::gauge_rows(std::ostream& o, const Simulation& sim) {
   const auto v = sample(sim);
-  const double t = sim.time() * 1e9;
-  for (std::size_t k = 0; k < v.size(); ++k) {
-    const GaugeSample& g = v[k];
-    o << t << ',' << gauges_[k].name << ',' << g.x * 1e6 << ',' << g.y * 1e6 << ',' << g.vx << ',' << g.vy << ','
-      << g.sxx * 1e-9 << ',' << g.syy * 1e-9 << ',' << g.sxy * 1e-9 << ',' << g.P * 1e-9 << ',' << g.rho * 1e-3 << ','
-      << g.T << '\n';
-  }
+  for (std::size_t k = 0; k < v.size(); ++k) csv_row(o, kGaugeColumns, GaugeRow{sim.time(), gauges_[k].name, v[k]});
 }
 
 void PointRecorder::surface_rows(std::ostream& o, const Simulation& sim) {
   const auto u = surface_velocity(sim);
-  const double t = sim.time() * 1e9;
-  for (std::size_t k = 0; k < u.size(); ++k) o << t << ',' << surfaces_[k].body_name << ',' << u[k] << '\n';
+  for (std::size_t k = 0; k < u.size(); ++k)
+    csv_row(o, kSurfaceColumns, SurfaceRow{sim.time(), surfaces_[k].body_name, u[k]});
 }
 
 }  // namespace smpm

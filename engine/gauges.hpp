@@ -71,7 +71,10 @@ class PointRecorder {
   // Mean y-velocity of each surface's points [m/s], summed in id order (any thread count, any
   // particle order: the same bits).
   std::vector<double> surface_velocity(const Simulation& sim);
-  // Rows at the simulation's time: `time_ns,gauge,x_um,...,T_K` and `time_ns,body,u_fs_m_s`.
+  // The CSV headers (README, "Output") and the rows at the simulation's time, from the column
+  // lists of engine/gauges.cpp: `time_ns,gauge,x_um,...,T_K` and `time_ns,body,u_fs_m_s`.
+  static std::string gauge_header();
+  static std::string surface_header();
   void gauge_rows(std::ostream& o, const Simulation& sim);
   void surface_rows(std::ostream& o, const Simulation& sim);
 
@@ -85,10 +88,5 @@ class PointRecorder {
   std::vector<std::size_t> where_;          // per unique_ entry: its current particle index
   std::size_t n_points_ = 0;
 };
-
-// The CSV headers (README, "Output").
-inline constexpr const char* kGaugeHeader =
-    "time_ns,gauge,x_um,y_um,vx_m_s,vy_m_s,sigma_xx_GPa,sigma_yy_GPa,sigma_xy_GPa,P_GPa,rho_g_cc,T_K\n";
-inline constexpr const char* kFreeSurfaceHeader = "time_ns,body,u_fs_m_s\n";
 
 }  // namespace smpm

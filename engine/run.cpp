@@ -15,14 +15,16 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <functional>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
+#include <string_view>
 
 #include "engine/case_reader.hpp"
 #include "engine/checkpoint.hpp"
+#include "engine/columns.hpp"
 #include "engine/diagnostics.hpp"
 #include "engine/output.hpp"
 #include "engine/provenance.hpp"
@@ -33,78 +35,97 @@ namespace smpm {
 
 namespace {
 
-// series.csv and series.h5: one entry per column, in file order. The CSV header, each row, the
-// HDF5 table's columns and units, and the checkpoint's keys ("series/<name>") all come from it.
-struct SeriesColumn {
-  const char* name;
-  const char* unit;
-  double (*value)(double t, std::size_t region, const RegionStats& st);
+// series.csv and series.h5: one row per region at a time, one entry per column in file order. The
+// CSV header, each row, the HDF5 table's columns and units, and the checkpoint's keys
+// ("series/<name>") all come from kSeriesColumns.
+struct SeriesRow {
+  double t;  // [s]
+  std::size_t region;
+  std::string_view name;
+  const RegionStats& s;
 };
 constexpr double kPerUs2 = 1e-12;  // 1/s^2 -> 1/us^2
-constexpr SeriesColumn kSeriesColumns[] = {
-    {"time_ns", "ns", [](double t, std::size_t, const RegionStats&) { return t * 1e9; }},
-    {"region", "index into the regions attribute", [](double, std::size_t r, const RegionStats&) { return double(r); }},
-    {"count", "1", [](double, std::size_t, const RegionStats& s) { return double(s.count); }},
-    {"P_mean_GPa", "GPa", [](double, std::size_t, const RegionStats& s) { return s.P.mean * 1e-9; }},
-    {"P_std_GPa", "GPa", [](double, std::size_t, const RegionStats& s) { return s.P.std * 1e-9; }},
-    {"T_mean_K", "K", [](double, std::size_t, const RegionStats& s) { return s.T.mean; }},
-    {"T_std_K", "K", [](double, std::size_t, const RegionStats& s) { return s.T.std; }},
-    {"rho_mean_gcc", "g/cc", [](double, std::size_t, const RegionStats& s) { return s.rho.mean * 1e-3; }},
-    {"rho_std_gcc", "g/cc", [](double, std::size_t, const RegionStats& s) { return s.rho.std * 1e-3; }},
-    {"Uy_mean_ms", "m/s", [](double, std::size_t, const RegionStats& s) { return s.Uy.mean; }},
-    {"Uy_std_ms", "m/s", [](double, std::size_t, const RegionStats& s) { return s.Uy.std; }},
-    {"R2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.R2 * kPerUs2; }},
-    {"D2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.D2 * kPerUs2; }},
-    {"S2_mean_per_us2", "1/us^2", [](double, std::size_t, const RegionStats& s) { return s.S2 * kPerUs2; }},
-    {"P_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.P.skew; }},
-    {"P_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.P.kurt; }},
-    {"T_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.T.skew; }},
-    {"T_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.T.kurt; }},
-    {"rho_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.rho.skew; }},
-    {"rho_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.rho.kurt; }},
-    {"Uy_skew", "1", [](double, std::size_t, const RegionStats& s) { return s.Uy.skew; }},
-    {"Uy_kurt", "1", [](double, std::size_t, const RegionStats& s) { return s.Uy.kurt; }},
-    {"R_mean_per_us", "1/us", [](double, std::size_t, const RegionStats& s) { return s.R * 1e-6; }},
-    {"D_mean_per_us", "1/us", [](double, std::size_t, const RegionStats& s) { return s.D * 1e-6; }},
-    {"open_porosity", "1", [](double, std::size_t, const RegionStats& s) { return s.open; }},
+constexpr Column<SeriesRow> kSeriesColumns[] = {
+    {"time_ns", "ns", [](const SeriesRow& r) { return r.t * 1e9; }},
+    {"region", "index into the regions attribute", [](const SeriesRow& r) { return double(r.region); },
+     [](const SeriesRow& r) { return r.name; }},
+    {"count", "1", [](const SeriesRow& r) { return double(r.s.count); }},
+    {"P_mean_GPa", "GPa", [](const SeriesRow& r) { return r.s.P.mean * 1e-9; }},
+    {"P_std_GPa", "GPa", [](const SeriesRow& r) { return r.s.P.std * 1e-9; }},
+    {"T_mean_K", "K", [](const SeriesRow& r) { return r.s.T.mean; }},
+    {"T_std_K", "K", [](const SeriesRow& r) { return r.s.T.std; }},
+    {"rho_mean_gcc", "g/cc", [](const SeriesRow& r) { return r.s.rho.mean * 1e-3; }},
+    {"rho_std_gcc", "g/cc", [](const SeriesRow& r) { return r.s.rho.std * 1e-3; }},
+    {"Uy_mean_ms", "m/s", [](const SeriesRow& r) { return r.s.Uy.mean; }},
+    {"Uy_std_ms", "m/s", [](const SeriesRow& r) { return r.s.Uy.std; }},
+    {"R2_mean_per_us2", "1/us^2", [](const SeriesRow& r) { return r.s.R2 * kPerUs2; }},
+    {"D2_mean_per_us2", "1/us^2", [](const SeriesRow& r) { return r.s.D2 * kPerUs2; }},
+    {"S2_mean_per_us2", "1/us^2", [](const SeriesRow& r) { return r.s.S2 * kPerUs2; }},
+    {"P_skew", "1", [](const SeriesRow& r) { return r.s.P.skew; }},
+    {"P_kurt", "1", [](const SeriesRow& r) { return r.s.P.kurt; }},
+    {"T_skew", "1", [](const SeriesRow& r) { return r.s.T.skew; }},
+    {"T_kurt", "1", [](const SeriesRow& r) { return r.s.T.kurt; }},
+    {"rho_skew", "1", [](const SeriesRow& r) { return r.s.rho.skew; }},
+    {"rho_kurt", "1", [](const SeriesRow& r) { return r.s.rho.kurt; }},
+    {"Uy_skew", "1", [](const SeriesRow& r) { return r.s.Uy.skew; }},
+    {"Uy_kurt", "1", [](const SeriesRow& r) { return r.s.Uy.kurt; }},
+    {"R_mean_per_us", "1/us", [](const SeriesRow& r) { return r.s.R * 1e-6; }},
+    {"D_mean_per_us", "1/us", [](const SeriesRow& r) { return r.s.D * 1e-6; }},
+    {"open_porosity", "1", [](const SeriesRow& r) { return r.s.open; }},
 };
-constexpr std::size_t kSeriesRegionColumn = 1;  // written as the region's name in series.csv
+// the region column: its name in series.csv, its index in series.h5
+constexpr std::size_t kSeriesRegionColumn = 1;
 
-// energy.csv: one entry per column, in file order (header and row)
+// energy.csv: one row per time
 struct EnergyRow {
-  double t;
+  double t;  // [s]
   Simulation::Energy e;
   std::array<double, 2> q;
   Simulation::Removed removed;
-  double residual;
+  double residual;  // [J/m]
 };
-struct EnergyColumn {
-  const char* name;
-  double (*value)(const EnergyRow& r);
-};
-constexpr EnergyColumn kEnergyColumns[] = {
-    {"time_ns", [](const EnergyRow& r) { return r.t * 1e9; }},
-    {"kinetic_J_per_m", [](const EnergyRow& r) { return r.e.kinetic; }},
-    {"internal_J_per_m", [](const EnergyRow& r) { return r.e.internal; }},
-    {"total_J_per_m", [](const EnergyRow& r) { return r.e.total(); }},
-    {"momentum_x_kg_m_s_per_m", [](const EnergyRow& r) { return r.q[0]; }},
-    {"momentum_y_kg_m_s_per_m", [](const EnergyRow& r) { return r.q[1]; }},
-    {"wall_removed_J_per_m", [](const EnergyRow& r) { return r.removed.wall; }},
-    {"contact_removed_J_per_m", [](const EnergyRow& r) { return r.removed.contact; }},
-    {"residual_J_per_m", [](const EnergyRow& r) { return r.residual; }},
+constexpr Column<EnergyRow> kEnergyColumns[] = {
+    {"time_ns", "ns", [](const EnergyRow& r) { return r.t * 1e9; }},
+    {"kinetic_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.kinetic; }},
+    {"internal_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.internal; }},
+    {"total_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.total(); }},
+    {"momentum_x_kg_m_s_per_m", "kg m/s per m", [](const EnergyRow& r) { return r.q[0]; }},
+    {"momentum_y_kg_m_s_per_m", "kg m/s per m", [](const EnergyRow& r) { return r.q[1]; }},
+    {"wall_removed_J_per_m", "J/m", [](const EnergyRow& r) { return r.removed.wall; }},
+    {"contact_removed_J_per_m", "J/m", [](const EnergyRow& r) { return r.removed.contact; }},
+    {"residual_J_per_m", "J/m", [](const EnergyRow& r) { return r.residual; }},
 };
 
-// "a,b,c\n" from a column list's names
-template <class Columns>
-std::string csv_header(const Columns& cols) {
-  std::string h;
-  for (const auto& c : cols) {
-    if (!h.empty()) h += ',';
-    h += c.name;
-  }
-  h += '\n';
-  return h;
-}
+// front.csv: the compression front's position at a time
+struct FrontRow {
+  double t, y;  // [s], [m]
+};
+constexpr Column<FrontRow> kFrontColumns[] = {
+    {"time_ns", "ns", [](const FrontRow& r) { return r.t * 1e9; }},
+    {"front_y_um", "um", [](const FrontRow& r) { return r.y * 1e6; }},
+};
+
+// wall.csv: the bottom wall's normal stress at a time, its force per unit depth over its width
+struct WallRow {
+  double t, force, width;  // [s], [N/m], [m]
+};
+constexpr Column<WallRow> kWallColumns[] = {
+    {"time_ns", "ns", [](const WallRow& r) { return r.t * 1e9; }},
+    {"wall_stress_GPa", "GPa", [](const WallRow& r) { return r.force / r.width * 1e-9; }},
+};
+
+// voids.csv: the void area open in the target ("target") or one of its regions at a time
+struct VoidsRow {
+  double t;  // [s]
+  std::string_view region;
+  double area, fraction;  // [m^2], of the region's band (NaN for the whole target)
+};
+constexpr Column<VoidsRow> kVoidsColumns[] = {
+    {"time_ns", "ns", [](const VoidsRow& r) { return r.t * 1e9; }},
+    {"region", "name", nullptr, [](const VoidsRow& r) { return r.region; }},
+    {"open_area_um2", "um^2", [](const VoidsRow& r) { return r.area * 1e12; }},
+    {"open_fraction", "1", [](const VoidsRow& r) { return r.fraction; }},
+};
 
 // The signal that asked the run to stop (SIGINT or SIGTERM; 0: none): the run stops after the
 // current step and writes its last state, as for a batch scheduler's SIGTERM.
@@ -223,6 +244,56 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
   return f;
 }
 
+// run.json's entry of body k: its setup and, for a Mie-Gruneisen body in motion, the exact
+// Hugoniot states its stop from that speed reaches.
+toml::table body_json(const Scene& scene, std::size_t k) {
+  const auto& b = scene.bodies[k];
+  toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
+                 {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}, {"porosity", b.porosity},
+                 {"voids", static_cast<int64_t>(b.voids)}};
+  const Material& m = scene.materials[scene.body_material[k]];
+  const double up = std::hypot(b.vx0, b.vy0);
+  if (m.eos != EosKind::MieGruneisen || up <= 0.0) return bt;
+  // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
+  const auto h = hugoniot(m, up);
+  if (h.in_range)
+    bt.insert("dense_hugoniot", toml::table{{"up_m_s", h.up}, {"Us_m_s", h.Us}, {"P_Pa", h.P},
+                                            {"rho_kg_m3", h.rho}, {"e_J_kg", h.e}, {"T_K", h.T},
+                                            {"T_simple_K", h.T_simple}});
+  else
+    bt.insert("dense_hugoniot", toml::table{{"beyond_range", true}, {"largest_up_m_s", h.up}});
+  if (b.porosity > 0.0) {
+    // complete compaction: the front a converged porous run approaches (docs/verification.md)
+    const auto c = porous_hugoniot(m, up, b.porosity);
+    if (c.in_range)
+      bt.insert("compacted_hugoniot", toml::table{{"up_m_s", c.up}, {"Us_m_s", c.Us},
+                                                  {"front_speed_wall_frame_m_s", c.Us - c.up}, {"P_Pa", c.P},
+                                                  {"rho_kg_m3", c.rho}, {"e_J_kg", c.e}, {"T_K", c.T}});
+    else
+      bt.insert("compacted_hugoniot", toml::table{{"not_found", true}});
+  }
+  return bt;
+}
+
+// A JSON file written whole: to FILE.tmp, then renamed (a killed run leaves the previous one).
+void write_json_file(const std::filesystem::path& file, const toml::table& t) {
+  const auto tmp = file.string() + ".tmp";
+  {
+    std::ofstream o(tmp);
+    o << toml::json_formatter{t} << "\n";
+    o.flush();
+    if (!o) {
+      const std::string why = std::strerror(errno);
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw OutputError("cannot write " + tmp + ": " + why);
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) throw OutputError("cannot rename " + tmp + " to " + file.string() + ": " + ec.message());
+}
+
 void write_run_json(const std::filesystem::path& file, const Scene& scene, const Simulation& sim,
                     const RunSummary& s, int threads, const toml::table& prov) {
   toml::table t;
@@ -254,35 +325,7 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
                                         {"heat", pt.heat}, {"diagnostics", s.diagnostics_seconds},
                                         {"output", s.output_seconds}});
   toml::array bodies;
-  for (std::size_t k = 0; k < scene.bodies.size(); ++k) {
-    const auto& b = scene.bodies[k];
-    toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
-                   {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}, {"porosity", b.porosity},
-                   {"voids", static_cast<int64_t>(b.voids)}};
-    const Material& m = scene.materials[scene.body_material[k]];
-    const double up = std::hypot(b.vx0, b.vy0);
-    if (m.eos == EosKind::MieGruneisen && up > 0.0) {
-      // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
-      const auto h = hugoniot(m, up);
-      if (h.in_range)
-        bt.insert("dense_hugoniot", toml::table{{"up_m_s", h.up}, {"Us_m_s", h.Us}, {"P_Pa", h.P},
-                                                {"rho_kg_m3", h.rho}, {"e_J_kg", h.e}, {"T_K", h.T},
-                                                {"T_simple_K", h.T_simple}});
-      else
-        bt.insert("dense_hugoniot", toml::table{{"beyond_range", true}, {"largest_up_m_s", h.up}});
-      if (b.porosity > 0.0) {
-        // complete compaction: the front a converged porous run approaches (docs/verification.md)
-        const auto c = porous_hugoniot(m, up, b.porosity);
-        if (c.in_range)
-          bt.insert("compacted_hugoniot", toml::table{{"up_m_s", c.up}, {"Us_m_s", c.Us},
-                                                      {"front_speed_wall_frame_m_s", c.Us - c.up}, {"P_Pa", c.P},
-                                                      {"rho_kg_m3", c.rho}, {"e_J_kg", c.e}, {"T_K", c.T}});
-        else
-          bt.insert("compacted_hugoniot", toml::table{{"not_found", true}});
-      }
-    }
-    bodies.push_back(std::move(bt));
-  }
+  for (std::size_t k = 0; k < scene.bodies.size(); ++k) bodies.push_back(body_json(scene, k));
   t.insert("bodies", std::move(bodies));
   toml::array regions;  // the regions of series.csv, in its order
   for (const auto& r : scene.regions)
@@ -290,21 +333,7 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
                                   {"body", static_cast<int64_t>(r.body)}});
   t.insert("regions", std::move(regions));
   t.insert("case_resolved", scene.resolved);
-  const auto tmp = file.string() + ".tmp";
-  {
-    std::ofstream o(tmp);
-    o << toml::json_formatter{t} << "\n";
-    o.flush();
-    if (!o) {
-      const std::string why = std::strerror(errno);
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw OutputError("cannot write " + tmp + ": " + why);
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) throw OutputError("cannot rename " + tmp + " to " + file.string() + ": " + ec.message());
+  write_json_file(file, t);
 }
 
 // `check`'s lines on the followed points: each gauge (only their count beyond 20), each free surface.
@@ -409,49 +438,472 @@ void check_output_dir(const std::filesystem::path& out, bool overwrite) {
 
 namespace {
 
-// A CSV file of the run: a new run writes its header; a resumed one cuts the file back to its
-// length at the checkpoint (rows written after it go) and appends.
-void open_csv(std::ofstream& o, const std::filesystem::path& file, const char* header,
-              const CheckpointReader* resume) {
-  if (!resume) {
-    o.open(file);
-    o << header;
-    return;
+// A CSV file of the run, written a whole row at a time.
+class CsvFile {
+ public:
+  // A new run writes the header; a resumed one cuts the file back to its length at the checkpoint
+  // (rows written after it go) and appends. precision: significant digits of its numbers.
+  void open(const std::filesystem::path& file, const std::string& header, int precision,
+            const CheckpointReader* resume) {
+    file_ = file;
+    if (!resume) {
+      o_.open(file);
+      o_ << header;
+    } else {
+      const auto length = static_cast<std::uintmax_t>(resume->integer(key()));
+      std::error_code ec;
+      if (!std::filesystem::exists(file, ec) || std::filesystem::file_size(file, ec) < length)
+        throw CaseError("cannot resume: " + file.string() + " is missing or shorter than at the checkpoint (" +
+                        std::to_string(length) + " bytes)");
+      std::filesystem::resize_file(file, length, ec);
+      if (ec) throw OutputError("cannot cut " + file.string() + " back to its checkpoint length: " + ec.message());
+      o_.open(file, std::ios::app);
+    }
+    o_ << std::setprecision(precision);
   }
-  const auto key = "csv/" + file.filename().string();
-  const auto length = static_cast<std::uintmax_t>(resume->integer(key));
-  std::error_code ec;
-  if (!std::filesystem::exists(file, ec) || std::filesystem::file_size(file, ec) < length)
-    throw CaseError("cannot resume: " + file.string() + " is missing or shorter than at the checkpoint (" +
-                    std::to_string(length) + " bytes)");
-  std::filesystem::resize_file(file, length, ec);
-  if (ec) throw OutputError("cannot cut " + file.string() + " back to its checkpoint length: " + ec.message());
-  o.open(file, std::ios::app);
+  bool is_open() const { return o_.is_open(); }
+  std::ostream& stream() { return o_; }
+  template <class Columns, class Row>
+  void row(const Columns& cols, const Row& r) {
+    csv_row(o_, cols, r);
+  }
+  // After a write: the rows flushed whole (a killed run leaves no cut row) and checked.
+  void flush() { flush_checked(o_, file_); }
+  // The file's length [bytes] at a checkpoint, to which a resume cuts it back.
+  void save(CheckpointWriter& w) {
+    if (is_open()) w.put(key(), static_cast<std::int64_t>(o_.tellp()));
+  }
+
+ private:
+  std::string key() const { return "csv/" + file_.filename().string(); }
+  std::filesystem::path file_;
+  std::ofstream o_;
+};
+
+// Every output of a run but run.json and case_resolved.toml. The constructor opens them (a resumed
+// run: cut back to the checkpoint and reopened); each write_* writes the rows of the simulation's
+// current state and flushes them; save() puts their state into a checkpoint. The seconds spent
+// go to the summary's diagnostics_seconds (CSV rows) and output_seconds (snapshots, series.h5).
+class RunOutputs {
+ public:
+  RunOutputs(const Scene& scene, const Simulation& sim, const std::filesystem::path& out, RunSummary& s,
+             const CheckpointReader* resume);
+  void write_energy();     // energy.csv
+  void write_points();     // gauges.csv and freesurface.csv
+  void write_front();      // front.csv (a target at rest has none)
+  void write_series();     // series.csv, and the rows of series.h5's table
+  void write_series_h5();  // series.h5, the table so far
+  void write_wall();       // wall.csv (a bottom wall only), after every step
+  void snapshot();         // fields/snap_<step>.h5, then voids.csv (a target with voids only)
+  double E0() const { return E0_; }
+  // The series table, the snapshot index, the followed points and every CSV file's length.
+  void save(CheckpointWriter& w);
+
+ private:
+  void write_voids();
+  const Scene& scene_;
+  const Simulation& sim_;
+  std::filesystem::path out_;
+  RunSummary& s_;
+  SnapshotWriter snaps_;
+  // the compression front runs through the target: the body named "target", else body 0
+  std::size_t target_;
+  double vy0_;  // the target's initial y-velocity [m/s]
+  CsvFile voids_, series_, front_, energy_, gauges_, surface_, wall_;
+  std::vector<std::vector<double>> table_;  // series.h5: one vector per column of kSeriesColumns
+  double E0_ = 0.0;                         // total energy at t = 0 [J/m]
+  PointRecorder points_;
+};
+
+RunOutputs::RunOutputs(const Scene& scene, const Simulation& sim, const std::filesystem::path& out, RunSummary& s,
+                       const CheckpointReader* resume)
+    : scene_(scene), sim_(sim), out_(out), s_(s), snaps_(out / "fields"), target_(scene.target),
+      vy0_(scene.bodies[scene.target].vy0), table_(std::size(kSeriesColumns)),
+      points_(scene.gauges, scene.free_surfaces, sim.particles().size()) {
+  if (resume) snaps_.adopt(resume->text("run/snapshots"));
+  // voids.csv: the void area left open in the target (and its share of each region's band), at
+  // every snapshot
+  if (scene.bodies[target_].voids > 0) voids_.open(out / "voids.csv", csv_header(kVoidsColumns), 8, resume);
+  // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
+  series_.open(out / "series.csv", csv_header(kSeriesColumns), 8, resume);
+  if (resume)
+    for (std::size_t c = 0; c < table_.size(); ++c)
+      resume->get(std::string("series/") + kSeriesColumns[c].name, table_[c]);
+  if (vy0_ != 0.0) front_.open(out / "front.csv", csv_header(kFrontColumns), 10, resume);
+  energy_.open(out / "energy.csv", csv_header(kEnergyColumns), 12, resume);
+  E0_ = resume ? resume->number("run/E0") : sim.energy().total();
+  // gauges.csv and freesurface.csv: the points followed from t = 0 (engine/gauges.hpp), with
+  // energy.csv's rows
+  if (resume) points_.restore(*resume);
+  if (points_.has_gauges()) gauges_.open(out / "gauges.csv", PointRecorder::gauge_header(), 10, resume);
+  if (points_.has_surfaces()) surface_.open(out / "freesurface.csv", PointRecorder::surface_header(), 10, resume);
+  if (scene.solver.walls.lo[1] != kern::Wall::None)
+    wall_.open(out / "wall.csv", csv_header(kWallColumns), 10, resume);
 }
 
-// The run loop; `resume`: the checkpoint it continues from (resume_run), or null for a new run.
+void RunOutputs::write_energy() {
+  Timed t(s_.diagnostics_seconds);
+  EnergyRow row{sim_.time(), sim_.energy(), sim_.momentum(), sim_.removed(), 0.0};
+  // residual: the scheme's own energy error, what is neither in the total nor removed as loss
+  const double lost = sim_.removed_is_heat() ? 0.0 : row.removed.wall + row.removed.contact;
+  row.residual = row.e.total() + lost - E0_;
+  energy_.row(kEnergyColumns, row);
+  energy_.flush();
+}
+
+void RunOutputs::write_points() {
+  Timed t(s_.diagnostics_seconds);
+  if (gauges_.is_open()) {
+    points_.gauge_rows(gauges_.stream(), sim_);
+    gauges_.flush();
+  }
+  if (surface_.is_open()) {
+    points_.surface_rows(surface_.stream(), sim_);
+    surface_.flush();
+  }
+}
+
+void RunOutputs::write_front() {
+  if (vy0_ == 0.0) return;
+  Timed t(s_.diagnostics_seconds);
+  const auto& g = scene_.geom;
+  const double y =
+      front_position(sim_.particles(), static_cast<std::uint8_t>(target_), vy0_, g.y0, g.h, g.ny, vy0_ < 0);
+  if (std::isfinite(y)) {
+    front_.row(kFrontColumns, FrontRow{sim_.time(), y});
+    front_.flush();
+  }
+}
+
+void RunOutputs::write_series() {
+  Timed t(s_.diagnostics_seconds);
+  const auto stats = region_stats(sim_.particles(), scene_.regions, sim_.thermo(), sim_.materials(),
+                                  sim_.body_material(), sim_.gradient_current());
+  for (std::size_t r = 0; r < stats.size(); ++r) {
+    const SeriesRow row{sim_.time(), r, scene_.regions[r].name, stats[r]};
+    for (std::size_t c = 0; c < table_.size(); ++c) table_[c].push_back(kSeriesColumns[c].value(row));
+    series_.row(kSeriesColumns, row);
+  }
+  series_.flush();
+}
+
+void RunOutputs::write_series_h5() {
+  Timed t(s_.output_seconds);
+  const auto columns = column_names(kSeriesColumns), units = column_units(kSeriesColumns);
+  std::string unit_list, region_names;
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    unit_list += (c ? ", " : "") + columns[c] + ' ' + units[c];
+  for (const auto& r : scene_.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
+  write_table_h5(out_ / "series.h5", "series", columns, table_,
+                 {{"regions", region_names}, {"region_column", units[kSeriesRegionColumn]}, {"units", unit_list}});
+}
+
+void RunOutputs::write_wall() {
+  if (!wall_.is_open()) return;
+  Timed t(s_.diagnostics_seconds);
+  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().bottom, scene_.geom.length_x()});
+  wall_.flush();
+}
+
+// voids.csv: pixels a third of the target's point spacing (open_area), windows the whole
+// target and each of its regions' bands
+void RunOutputs::write_voids() {
+  if (!voids_.is_open()) return;
+  Timed t(s_.diagnostics_seconds);
+  const auto& g = scene_.geom;
+  const auto& body = scene_.bodies[target_];
+  const double pixel = std::sqrt(body.area / double(body.particles)) / 3;  // [m]
+  const double period = g.periodic_x ? g.length_x() : 0.0, x1 = g.x0 + g.length_x();
+  const auto b = static_cast<std::uint8_t>(target_);
+  std::vector<Window> win{{g.x0, x1, -1e300, 1e300}};
+  for (const auto& r : scene_.regions) win.push_back({g.x0, x1, r.y0, r.y1});
+  const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.x0);
+  voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
+  for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
+    const auto& r = scene_.regions[k];
+    if (r.body != b) continue;
+    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.y1 - r.y0) * g.length_x())});
+  }
+  voids_.flush();
+}
+
+void RunOutputs::snapshot() {
+  {
+    Timed t(s_.output_seconds);
+    snaps_.write(snapshot_fields(sim_), sim_.particles().size(), sim_.time(), sim_.steps());
+  }
+  write_voids();
+}
+
+void RunOutputs::save(CheckpointWriter& w) {
+  for (std::size_t c = 0; c < table_.size(); ++c) w.put(std::string("series/") + kSeriesColumns[c].name, table_[c]);
+  w.put("run/snapshots", snaps_.index_text());
+  if (points_.has_gauges() || points_.has_surfaces()) points_.save(w);
+  for (CsvFile* f : {&energy_, &series_, &front_, &wall_, &voids_, &gauges_, &surface_}) f->save(w);
+}
+
+// The provenance run.json carries: this run's, or for a resumed run the first run's with one
+// entry per resume in "restarts".
+toml::table run_provenance(const RunOptions& opt, int threads, const CheckpointReader* resume) {
+  toml::table prov = provenance(opt.command_line, threads);
+  if (!resume) return prov;
+  toml::table first = toml::parse(resume->text("run/provenance"));
+  if (!first.contains("restarts")) first.insert("restarts", toml::array{});
+  // the bitwise claim holds for the same build: say when this one is another
+  const toml::table* last =
+      first["restarts"].as_array()->empty() ? &first : first["restarts"].as_array()->back().as_table();
+  for (const char* k : {"git_commit", "git_dirty", "compiler", "cxx_flags", "build_type"})
+    if (last && (*last)[k].value<std::string>() != prov[k].value<std::string>())
+      std::fprintf(stderr, "warning: the checkpoint was written by another build (%s '%s', now '%s'): the run "
+                   "goes on, but its steps may differ from an uninterrupted run's in the last bits\n", k,
+                   (*last)[k].value_or(std::string("?")).c_str(), prov[k].value_or(std::string("?")).c_str());
+  prov.insert("from_step", resume->integer("sim/steps"));
+  first["restarts"].as_array()->push_back(std::move(prov));
+  return first;
+}
+
+// A run from its first (or resumed) state to its end: the step loop, which steps the simulation
+// and then writes the outputs that are due, the checkpoints and progress lines, and the final
+// state and run.json however the loop ends.
+class RunLoop {
+ public:
+  RunLoop(const Scene& scene, const RunOptions& opt, Simulation& sim, const std::filesystem::path& out,
+          toml::table prov, int threads, const CheckpointReader* resume)
+      : scene_(scene), opt_(opt), sim_(sim), out_(out), prov_(std::move(prov)), threads_(threads),
+        outputs_(scene, sim, out, s_, resume), t_end_(scene.run.end_time),
+        eps_(1e-12 * std::max(t_end_, 1e-30)), n_(static_cast<double>(sim.particles().size())) {}
+  RunSummary run(const CheckpointReader* resume);
+
+ private:
+  void start(const CheckpointReader* resume);
+  void step_loop();
+  bool stop_requested();
+  void step();
+  void write_checkpoint();
+  void print_start() const;
+  void print_progress(double now);
+  void finish();
+
+  const Scene& scene_;
+  const RunOptions& opt_;
+  Simulation& sim_;
+  std::filesystem::path out_;
+  toml::table prov_;
+  int threads_;
+  RunSummary s_;
+  RunOutputs outputs_;
+  const double t_end_, eps_;  // [s]
+  const double n_;            // particles
+  double t_resumed_ = 0.0;    // the simulation's time when this process took over [s]
+  double next_snap_ = 0.0, next_energy_ = 0.0;  // [s]
+  double wall0_ = 0.0, last_progress_ = 0.0, last_checkpoint_ = 0.0;  // omp_get_wtime() [s]
+  // particle-steps and wall seconds: the totals, and those of the runs before a resume
+  double particle_steps_ = 0.0, steps_before_ = 0.0, wall_before_ = 0.0;
+};
+
+RunSummary RunLoop::run(const CheckpointReader* resume) {
+  s_.status = "running";
+  write_run_json(out_ / "run.json", scene_, sim_, s_, threads_, prov_);
+  t_resumed_ = sim_.time();
+  if (!opt_.quiet) print_start();
+  g_stop_signal = 0;
+  std::signal(SIGINT, on_stop_signal);
+  std::signal(SIGTERM, on_stop_signal);
+  wall0_ = last_progress_ = last_checkpoint_ = omp_get_wtime();
+  try {
+    start(resume);
+    step_loop();
+  } catch (const CheckpointError& e) {  // a checkpoint that could not be written
+    s_.status = "failed";
+    s_.message = e.what();
+    s_.output_failed = true;
+  } catch (const StepError& e) {
+    s_.status = "failed";
+    s_.message = e.what();
+  } catch (const std::exception& e) {  // an output (CSV, snapshot, series.h5) failed
+    s_.status = "failed";
+    s_.message = e.what();
+    s_.output_failed = true;
+  }
+  finish();
+  return s_;
+}
+
+void RunLoop::print_start() const {
+  const double dt0 = sim_.stable_dt();
+  // a resumed run: the steps still to go, at the dt of the step it resumes at
+  const double left = scene_.run.end_time - sim_.time();
+  std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
+              "(dt %.3g ns at t = %.6g ns), %d threads, results in %s\n",
+              scene_.name.c_str(), sim_.particles().size(), scene_.geom.nx, scene_.geom.ny, scene_.geom.h * 1e6,
+              left * 1e9, std::ceil(left / dt0), dt0 * 1e9, sim_.time() * 1e9, threads_, out_.string().c_str());
+  std::fflush(stdout);
+}
+
+// A new run writes its t = 0 rows and snapshot; a resumed one takes the loop's state from the
+// checkpoint (its outputs of that moment are written already).
+void RunLoop::start(const CheckpointReader* resume) {
+  if (resume) {
+    next_snap_ = resume->number("run/next_snap");
+    next_energy_ = resume->number("run/next_energy");
+    particle_steps_ = steps_before_ = resume->number("run/particle_steps");
+    wall_before_ = resume->number("run/wall_seconds");
+    s_.diagnostics_seconds = resume->number("run/diagnostics_seconds");
+    s_.output_seconds = resume->number("run/output_seconds");
+    return;
+  }
+  outputs_.snapshot();
+  next_snap_ = scene_.run.snapshot_interval > 0 ? scene_.run.snapshot_interval : 2 * t_end_ + 1;
+  outputs_.write_energy();
+  outputs_.write_points();
+  outputs_.write_series();
+  next_energy_ = scene_.run.diagnostics_interval;
+}
+
+// Step, then write what is due: wall.csv every step; energy, gauges, front and series rows every
+// diagnostics interval; a snapshot and series.h5 every snapshot interval (the last one is
+// finish()'s); a checkpoint every checkpoint interval of wall time.
+void RunLoop::step_loop() {
+  while (sim_.time() < t_end_ - eps_) {
+    if (stop_requested()) break;
+    step();
+    outputs_.write_wall();
+    if (sim_.time() >= next_energy_ - eps_) {
+      outputs_.write_energy();
+      outputs_.write_points();
+      outputs_.write_front();
+      outputs_.write_series();
+      next_energy_ = sim_.time() + scene_.run.diagnostics_interval;
+    }
+    if (sim_.time() >= next_snap_ - eps_ && sim_.time() < t_end_ - eps_) {
+      outputs_.snapshot();
+      outputs_.write_series_h5();
+      next_snap_ += scene_.run.snapshot_interval;
+    }
+    const double now = omp_get_wtime();
+    if (scene_.run.checkpoint_interval > 0 && now - last_checkpoint_ >= scene_.run.checkpoint_interval) {
+      write_checkpoint();
+      last_checkpoint_ = omp_get_wtime();
+    }
+    if (!opt_.quiet && now - last_progress_ >= scene_.run.progress_interval) print_progress(now);
+  }
+  if (s_.status == "running") {
+    s_.status = "completed";
+    s_.message = "reached end_time";
+  }
+}
+
+// A stop signal (a checkpoint is written) or run.max_steps ends the loop before end_time.
+bool RunLoop::stop_requested() {
+  if (const int sig = g_stop_signal) {
+    s_.status = "interrupted";
+    s_.message = std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at step " +
+                 std::to_string(sim_.steps());
+    write_checkpoint();
+    s_.message += "; checkpoint written: continue with `shockmpm resume " + out_.string() + "`";
+    return true;
+  }
+  if (scene_.run.max_steps > 0 && sim_.steps() >= scene_.run.max_steps) {
+    s_.status = "completed";
+    s_.message = "stopped at run.max_steps = " + std::to_string(scene_.run.max_steps);
+    return true;
+  }
+  return false;
+}
+
+void RunLoop::step() {
+  // L is stored on the particles only by the steps after which statistics are written (the
+  // step's dt is this min, as in step())
+  const double t_next = sim_.time() + std::min(sim_.stable_dt(), t_end_ - sim_.time());
+  sim_.store_gradient(t_next >= next_energy_ - eps_ || t_next >= t_end_ - eps_ ||
+                      (scene_.run.max_steps > 0 && sim_.steps() + 1 >= scene_.run.max_steps));
+  sim_.step(t_end_ - sim_.time());
+  particle_steps_ += n_;
+}
+
+// The whole state at a step boundary, every output of the step written (engine/checkpoint.hpp);
+// the last two are kept.
+void RunLoop::write_checkpoint() {
+  Timed t(s_.output_seconds);
+  CheckpointWriter w(checkpoint_path(out_, sim_.steps()));
+  w.put("run/case_name", scene_.name);
+  w.put("run/case_text", resolved_case_text(scene_));
+  {
+    std::ostringstream p;
+    p << prov_;
+    w.put("run/provenance", p.str());
+  }
+  sim_.save(w);
+  w.put("run/E0", outputs_.E0());
+  w.put("run/next_snap", next_snap_);
+  w.put("run/next_energy", next_energy_);
+  w.put("run/particle_steps", particle_steps_);
+  w.put("run/wall_seconds", wall_before_ + omp_get_wtime() - wall0_);
+  w.put("run/diagnostics_seconds", s_.diagnostics_seconds);
+  w.put("run/output_seconds", s_.output_seconds);
+  outputs_.save(w);
+  w.commit();
+  const auto all = list_checkpoints(out_);
+  for (std::size_t k = 0; k + 2 < all.size(); ++k) std::filesystem::remove(all[k]);
+}
+
+void RunLoop::print_progress(double now) {
+  last_progress_ = now;
+  const double frac = sim_.time() / t_end_, el = now - wall0_;  // el: this process's
+  const double done = (sim_.time() - t_resumed_) / std::max(t_end_ - t_resumed_, 1e-300);
+  std::printf("step %8ld  t = %10.4g ns  dt = %9.3g ns  %5.1f %%  ETA %s  %.3g M particle-steps/s\n", sim_.steps(),
+              sim_.time() * 1e9, sim_.last_dt() * 1e9, 100 * frac,
+              hms(el * (1 - done) / std::max(done, 1e-12)).c_str(), (particle_steps_ - steps_before_) / el * 1e-6);
+  std::fflush(stdout);
+}
+
+// The final state, whatever happened, and run.json saying how the run ended.
+void RunLoop::finish() {
+  s_.steps = sim_.steps();
+  s_.end_time = sim_.time();
+  // after an output failure each is still tried (the first failure is the run's message)
+  for (auto write : {&RunOutputs::write_energy, &RunOutputs::write_points, &RunOutputs::write_series,
+                     &RunOutputs::write_series_h5, &RunOutputs::snapshot}) {
+    try {
+      (outputs_.*write)();
+    } catch (const std::exception& e) {
+      if (!s_.output_failed) s_.message = (s_.status == "completed" ? "" : s_.message + "; then ") + e.what();
+      s_.status = "failed";
+      s_.output_failed = true;
+    }
+  }
+  // a completed run needs no checkpoint (its last state is the last snapshot)
+  if (s_.status == "completed") {
+    std::error_code ec;
+    std::filesystem::remove_all(out_ / "checkpoint", ec);
+  }
+  // wall time of the whole loop, first and last snapshots included (and of the runs before a resume)
+  s_.wall_seconds = wall_before_ + omp_get_wtime() - wall0_;
+  s_.particle_steps_per_s = s_.wall_seconds > 0 ? particle_steps_ / s_.wall_seconds : 0.0;
+  try {
+    write_run_json(out_ / "run.json", scene_, sim_, s_, threads_, prov_);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s (run.json could not record how the run ended: %s)\n", e.what(),
+                 s_.message.c_str());
+    s_.output_failed = true;
+    if (s_.status == "completed") s_.status = "failed";
+  }
+  if (!opt_.quiet) {
+    std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",
+                s_.status.c_str(), s_.steps, s_.end_time * 1e9, s_.wall_seconds, s_.particle_steps_per_s * 1e-6,
+                threads_);
+    std::printf("results in %s\n", out_.string().c_str());
+  }
+  // why a run stopped early goes to stderr, with --quiet too
+  if (s_.status != "completed") std::fprintf(stderr, "%s: %s\n", s_.status.c_str(), s_.message.c_str());
+}
+
+// The run; `resume`: the checkpoint it continues from (resume_run), or null for a new run.
 RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader* resume) {
   if (opt.threads > 0) omp_set_num_threads(opt.threads);
   const int threads = omp_get_max_threads();
   const auto out = output_dir(opt, scene.name);
-  // provenance: the first run's, and one entry per resume in "restarts"
-  toml::table prov = provenance(opt.command_line, threads);
-  if (resume) {
-    toml::table first = toml::parse(resume->text("run/provenance"));
-    if (!first.contains("restarts")) first.insert("restarts", toml::array{});
-    // the bitwise claim holds for the same build: say when this one is another
-    const toml::table* last = first["restarts"].as_array()->empty()
-                                  ? &first
-                                  : first["restarts"].as_array()->back().as_table();
-    for (const char* k : {"git_commit", "git_dirty", "compiler", "cxx_flags", "build_type"})
-      if (last && (*last)[k].value<std::string>() != prov[k].value<std::string>())
-        std::fprintf(stderr, "warning: the checkpoint was written by another build (%s '%s', now '%s'): the run "
-                     "goes on, but its steps may differ from an uninterrupted run's in the last bits\n", k,
-                     (*last)[k].value_or(std::string("?")).c_str(), prov[k].value_or(std::string("?")).c_str());
-    prov.insert("from_step", resume->integer("sim/steps"));
-    first["restarts"].as_array()->push_back(std::move(prov));
-    prov = std::move(first);
-  }
+  toml::table prov = run_provenance(opt, threads, resume);
   Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material, std::move(scene.particles));
   if (resume) sim.restore(*resume);
   // a run owns its output directory: an earlier run's results there go (--overwrite), now
@@ -464,325 +916,8 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
     c << resolved_case_text(scene);
     flush_checked(c, out / "case_resolved.toml");
   }
-  SnapshotWriter snaps(out / "fields");
-  if (resume) snaps.adopt(resume->text("run/snapshots"));
-  RunSummary s;
-  // the compression front runs through the target: the body named "target", else body 0
-  const std::size_t target = scene.target;
-  // voids.csv: the void area left open in the target (and its share of each region's band),
-  // at every snapshot; pixels a quarter of the point spacing (open_area)
-  std::ofstream voids;
-  if (scene.bodies[target].voids > 0) {
-    open_csv(voids, out / "voids.csv", "time_ns,region,open_area_um2,open_fraction\n", resume);
-    voids << std::setprecision(8);
-  }
-  auto write_voids = [&] {
-    if (!voids.is_open()) return;
-    Timed t(s.diagnostics_seconds);
-    const auto& g = scene.geom;
-    const double pixel = std::sqrt(scene.bodies[target].area / double(scene.bodies[target].particles)) / 3;  // [m]
-    const double period = g.periodic_x ? g.length_x() : 0.0, x1 = g.x0 + g.length_x();
-    const auto b = static_cast<std::uint8_t>(target);
-    std::vector<Window> win{{g.x0, x1, -1e300, 1e300}};
-    for (const auto& r : scene.regions) win.push_back({g.x0, x1, r.y0, r.y1});
-    const auto a = open_area(sim.particles(), b, win, pixel, 0.75, period, g.x0);
-    voids << sim.time() * 1e9 << ",target," << a[0] * 1e12 << ",nan\n";
-    for (std::size_t k = 0; k < scene.regions.size(); ++k) {
-      const auto& r = scene.regions[k];
-      if (r.body != b) continue;
-      voids << sim.time() * 1e9 << ',' << r.name << ',' << a[k + 1] * 1e12 << ',' << a[k + 1] / ((r.y1 - r.y0) * g.length_x()) << '\n';
-    }
-    flush_checked(voids, out / "voids.csv");
-  };
-  auto snapshot = [&] {
-    {
-      Timed t(s.output_seconds);
-      snaps.write(snapshot_fields(sim), sim.particles().size(), sim.time(), sim.steps());
-    }
-    write_voids();
-  };
-  // regional statistics: series.csv every diagnostics interval, series.h5 with the same table
-  std::ofstream series;
-  open_csv(series, out / "series.csv", csv_header(kSeriesColumns).c_str(), resume);
-  series << std::setprecision(8);
-  std::vector<std::string> columns, units;
-  for (const auto& c : kSeriesColumns) {
-    columns.emplace_back(c.name);
-    units.emplace_back(c.unit);
-  }
-  std::vector<std::vector<double>> table(columns.size());
-  if (resume)
-    for (std::size_t c = 0; c < columns.size(); ++c) resume->get("series/" + columns[c], table[c]);
-  std::string region_names;
-  for (const auto& r : scene.regions) region_names += (region_names.empty() ? "" : ",") + r.name;
-  auto write_series = [&] {
-    Timed t(s.diagnostics_seconds);
-    const auto stats = region_stats(sim.particles(), scene.regions, sim.thermo(), sim.materials(), sim.body_material(),
-                                    sim.gradient_current());
-    for (std::size_t r = 0; r < stats.size(); ++r) {
-      for (std::size_t c = 0; c < columns.size(); ++c) {
-        const double v = kSeriesColumns[c].value(sim.time(), r, stats[r]);
-        table[c].push_back(v);
-        if (c == kSeriesRegionColumn) series << ',' << scene.regions[r].name;
-        else series << (c ? "," : "") << v;
-      }
-      series << '\n';
-    }
-    flush_checked(series, out / "series.csv");
-  };
-  auto write_series_h5 = [&] {
-    Timed t(s.output_seconds);
-    std::string unit_list;
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      if (c) unit_list += ", ";
-      unit_list += columns[c];
-      unit_list += ' ';
-      unit_list += units[c];
-    }
-    write_table_h5(out / "series.h5", "series", columns, table,
-                   {{"regions", region_names}, {"region_column", units[kSeriesRegionColumn]}, {"units", unit_list}});
-  };
-  const double vy0 = scene.bodies[target].vy0;
-  std::ofstream front;
-  if (vy0 != 0.0) {
-    open_csv(front, out / "front.csv", "time_ns,front_y_um\n", resume);
-    front << std::setprecision(10);
-  }
-  auto write_front = [&] {
-    if (vy0 == 0.0) return;
-    Timed t(s.diagnostics_seconds);
-    const auto& g = scene.geom;
-    const double y = front_position(sim.particles(), static_cast<std::uint8_t>(target), vy0, g.y0, g.h, g.ny, vy0 < 0);
-    if (std::isfinite(y)) {
-      front << sim.time() * 1e9 << ',' << y * 1e6 << '\n';
-      flush_checked(front, out / "front.csv");
-    }
-  };
-  std::ofstream energy;
-  open_csv(energy, out / "energy.csv", csv_header(kEnergyColumns).c_str(), resume);
-  const double E0 = resume ? resume->number("run/E0") : sim.energy().total();
-  // gauges.csv and freesurface.csv: the points followed from t = 0 (engine/gauges.hpp), with
-  // energy.csv's rows
-  PointRecorder points(scene.gauges, scene.free_surfaces, sim.particles().size());
-  if (resume) points.restore(*resume);
-  std::ofstream gauges, surface;
-  if (points.has_gauges()) {
-    open_csv(gauges, out / "gauges.csv", kGaugeHeader, resume);
-    gauges << std::setprecision(10);
-  }
-  if (points.has_surfaces()) {
-    open_csv(surface, out / "freesurface.csv", kFreeSurfaceHeader, resume);
-    surface << std::setprecision(10);
-  }
-  auto write_points = [&] {
-    Timed t(s.diagnostics_seconds);
-    if (gauges.is_open()) {
-      points.gauge_rows(gauges, sim);
-      flush_checked(gauges, out / "gauges.csv");
-    }
-    if (surface.is_open()) {
-      points.surface_rows(surface, sim);
-      flush_checked(surface, out / "freesurface.csv");
-    }
-  };
-  energy << std::setprecision(12);
-  const bool has_wall = scene.solver.walls.lo[1] != kern::Wall::None;
-  std::ofstream wall;
-  if (has_wall) {
-    open_csv(wall, out / "wall.csv", "time_ns,wall_stress_GPa\n", resume);
-    wall << std::setprecision(10);
-  }
-  auto write_energy = [&] {
-    Timed t(s.diagnostics_seconds);
-    EnergyRow row{sim.time(), sim.energy(), sim.momentum(), sim.removed(), 0.0};
-    // residual: the scheme's own energy error, what is neither in the total nor removed as loss
-    const double lost = sim.removed_is_heat() ? 0.0 : row.removed.wall + row.removed.contact;
-    row.residual = row.e.total() + lost - E0;
-    for (std::size_t c = 0; c < std::size(kEnergyColumns); ++c) energy << (c ? "," : "") << kEnergyColumns[c].value(row);
-    energy << '\n';
-    flush_checked(energy, out / "energy.csv");
-  };
-  s.status = "running";
-  write_run_json(out / "run.json", scene, sim, s, threads, prov);
-  const double t_resumed = sim.time();
-  if (!opt.quiet) {
-    const double dt0 = sim.stable_dt();
-    // a resumed run: the steps still to go, at the dt of the step it resumes at
-    const double left = scene.run.end_time - sim.time();
-    std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
-                "(dt %.3g ns at t = %.6g ns), %d threads, results in %s\n",
-                scene.name.c_str(), sim.particles().size(), scene.geom.nx, scene.geom.ny, scene.geom.h * 1e6,
-                left * 1e9, std::ceil(left / dt0), dt0 * 1e9, sim.time() * 1e9, threads, out.string().c_str());
-    std::fflush(stdout);
-  }
-  g_stop_signal = 0;
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
-
-  const double t_end = scene.run.end_time;
-  const double eps = 1e-12 * std::max(t_end, 1e-30);
-  double next_snap = 0.0, next_energy = 0.0;
-  const double wall0 = omp_get_wtime();
-  double last_progress = wall0, last_checkpoint = wall0;
-  // particle-steps and wall seconds: the totals, and those of the runs before a resume
-  double particle_steps = 0.0, steps_before = 0.0, wall_before = 0.0;
-  const double n = static_cast<double>(sim.particles().size());
-  const std::pair<const char*, std::ofstream*> csvs[] = {
-      {"energy.csv", &energy}, {"series.csv", &series}, {"front.csv", &front}, {"wall.csv", &wall}, {"voids.csv", &voids},
-      {"gauges.csv", &gauges}, {"freesurface.csv", &surface}};
-  // the whole state at a step boundary, every output of the step written (engine/checkpoint.hpp);
-  // the last two are kept
-  auto write_checkpoint = [&] {
-    Timed t(s.output_seconds);
-    CheckpointWriter w(checkpoint_path(out, sim.steps()));
-    w.put("run/case_name", scene.name);
-    w.put("run/case_text", resolved_case_text(scene));
-    {
-      std::ostringstream p;
-      p << prov;
-      w.put("run/provenance", p.str());
-    }
-    sim.save(w);
-    w.put("run/E0", E0);
-    w.put("run/next_snap", next_snap);
-    w.put("run/next_energy", next_energy);
-    w.put("run/particle_steps", particle_steps);
-    w.put("run/wall_seconds", wall_before + omp_get_wtime() - wall0);
-    w.put("run/diagnostics_seconds", s.diagnostics_seconds);
-    w.put("run/output_seconds", s.output_seconds);
-    for (std::size_t c = 0; c < columns.size(); ++c) w.put("series/" + columns[c], table[c]);
-    w.put("run/snapshots", snaps.index_text());
-    if (points.has_gauges() || points.has_surfaces()) points.save(w);
-    for (const auto& [name, o] : csvs)
-      if (o->is_open()) w.put(std::string("csv/") + name, static_cast<std::int64_t>(o->tellp()));
-    w.commit();
-    const auto all = list_checkpoints(out);
-    for (std::size_t k = 0; k + 2 < all.size(); ++k) std::filesystem::remove(all[k]);
-  };
-  try {
-    if (resume) {
-      next_snap = resume->number("run/next_snap");
-      next_energy = resume->number("run/next_energy");
-      particle_steps = steps_before = resume->number("run/particle_steps");
-      wall_before = resume->number("run/wall_seconds");
-      s.diagnostics_seconds = resume->number("run/diagnostics_seconds");
-      s.output_seconds = resume->number("run/output_seconds");
-    } else {
-      snapshot();
-      next_snap = scene.run.snapshot_interval > 0 ? scene.run.snapshot_interval : 2 * t_end + 1;
-      write_energy();
-      write_points();
-      write_series();
-      next_energy = scene.run.diagnostics_interval;
-    }
-    while (sim.time() < t_end - eps) {
-      if (const int sig = g_stop_signal) {
-        s.status = "interrupted";
-        s.message = std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at step " +
-                    std::to_string(sim.steps());
-        write_checkpoint();
-        s.message += "; checkpoint written: continue with `shockmpm resume " + out.string() + "`";
-        break;
-      }
-      if (scene.run.max_steps > 0 && sim.steps() >= scene.run.max_steps) {
-        s.status = "completed";
-        s.message = "stopped at run.max_steps = " + std::to_string(scene.run.max_steps);
-        break;
-      }
-      // L is stored on the particles only by the steps after which statistics are written (the
-      // step's dt is this min, as in step())
-      const double t_next = sim.time() + std::min(sim.stable_dt(), t_end - sim.time());
-      sim.store_gradient(t_next >= next_energy - eps || t_next >= t_end - eps ||
-                         (scene.run.max_steps > 0 && sim.steps() + 1 >= scene.run.max_steps));
-      sim.step(t_end - sim.time());
-      particle_steps += n;
-      if (has_wall) {
-        Timed t(s.diagnostics_seconds);
-        wall << sim.time() * 1e9 << ',' << sim.wall_forces().bottom / scene.geom.length_x() * 1e-9 << '\n';
-        flush_checked(wall, out / "wall.csv");  // every CSV row whole: a killed run leaves no cut row
-      }
-      if (sim.time() >= next_energy - eps) {
-        write_energy();
-        write_points();
-        write_front();
-        write_series();
-        next_energy = sim.time() + scene.run.diagnostics_interval;
-      }
-      if (sim.time() >= next_snap - eps && sim.time() < t_end - eps) {
-        snapshot();
-        write_series_h5();
-        next_snap += scene.run.snapshot_interval;
-      }
-      const double now = omp_get_wtime();
-      if (scene.run.checkpoint_interval > 0 && now - last_checkpoint >= scene.run.checkpoint_interval) {
-        write_checkpoint();
-        last_checkpoint = omp_get_wtime();
-      }
-      if (!opt.quiet && now - last_progress >= scene.run.progress_interval) {
-        last_progress = now;
-        const double frac = sim.time() / t_end, el = now - wall0;  // el: this process's
-        const double done = (sim.time() - t_resumed) / std::max(t_end - t_resumed, 1e-300);
-        std::printf("step %8ld  t = %10.4g ns  dt = %9.3g ns  %5.1f %%  ETA %s  %.3g M particle-steps/s\n",
-                    sim.steps(), sim.time() * 1e9, sim.last_dt() * 1e9, 100 * frac,
-                    hms(el * (1 - done) / std::max(done, 1e-12)).c_str(), (particle_steps - steps_before) / el * 1e-6);
-        std::fflush(stdout);
-      }
-    }
-    if (s.status == "running") {
-      s.status = "completed";
-      s.message = "reached end_time";
-    }
-  } catch (const CheckpointError& e) {  // a checkpoint that could not be written
-    s.status = "failed";
-    s.message = e.what();
-    s.output_failed = true;
-  } catch (const StepError& e) {
-    s.status = "failed";
-    s.message = e.what();
-  } catch (const std::exception& e) {  // an output (CSV, snapshot, series.h5) failed
-    s.status = "failed";
-    s.message = e.what();
-    s.output_failed = true;
-  }
-  s.steps = sim.steps();
-  s.end_time = sim.time();
-  // final state, whatever happened; after an output failure each is still tried (the first
-  // failure is the run's message)
-  for (const auto& write : {std::function<void()>(write_energy), std::function<void()>(write_points),
-                            std::function<void()>(write_series),
-                            std::function<void()>(write_series_h5), std::function<void()>(snapshot)}) {
-    try {
-      write();
-    } catch (const std::exception& e) {
-      if (!s.output_failed) s.message = (s.status == "completed" ? "" : s.message + "; then ") + e.what();
-      s.status = "failed";
-      s.output_failed = true;
-    }
-  }
-  // a completed run needs no checkpoint (its last state is the last snapshot)
-  if (s.status == "completed") {
-    std::error_code ec;
-    std::filesystem::remove_all(out / "checkpoint", ec);
-  }
-  // wall time of the whole loop, first and last snapshots included (and of the runs before a resume)
-  s.wall_seconds = wall_before + omp_get_wtime() - wall0;
-  s.particle_steps_per_s = s.wall_seconds > 0 ? particle_steps / s.wall_seconds : 0.0;
-  try {
-    write_run_json(out / "run.json", scene, sim, s, threads, prov);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s (run.json could not record how the run ended: %s)\n", e.what(),
-                 s.message.c_str());
-    s.output_failed = true;
-    if (s.status == "completed") s.status = "failed";
-  }
-  if (!opt.quiet) {
-    std::printf("%s after %ld steps, t = %.6g ns, %.2f s wall, %.3g M particle-steps/s (%d threads)\n",
-                s.status.c_str(), s.steps, s.end_time * 1e9, s.wall_seconds, s.particle_steps_per_s * 1e-6, threads);
-    std::printf("results in %s\n", out.string().c_str());
-  }
-  // why a run stopped early goes to stderr, with --quiet too
-  if (s.status != "completed") std::fprintf(stderr, "%s: %s\n", s.status.c_str(), s.message.c_str());
-  return s;
+  RunLoop loop(scene, opt, sim, out, std::move(prov), threads, resume);
+  return loop.run(resume);
 }
 
 }  // namespace
