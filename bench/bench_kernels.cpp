@@ -147,13 +147,13 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
     return s;
   }
   kern::GridGeom& g = s->g;
-  grid_dims(n / 4, g.nx, g.ny);
+  grid_dims(n / 4, g.n[0], g.n[1]);
   g.h = kH;
-  g.x0 = 0.0;
-  g.y0 = 0.0;
+  g.lo[0] = 0.0;
+  g.lo[1] = 0.0;
   const Material mat = bench_material();
   Particles& P = s->P;
-  P = fill_rectangle(g, kPpc, g.x0, g.x0 + g.length_x(), g.y0, g.y0 + g.length_y(), mat.rho0, 0.0, 0.0, 0);
+  P = fill_rectangle(g, kPpc, g.lo[0], g.lo[0] + g.length(0), g.lo[1], g.lo[1] + g.length(1), mat.rho0, 0.0, 0.0, 0);
   if (P.size() != n) {
     s->error = "fill_rectangle made " + std::to_string(P.size()) + " particles, expected " + std::to_string(n);
     return s;
@@ -194,7 +194,7 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   kern::compute_keys(g, positions(P).data(), n, s->key.data());
   kern::counting_sort(s->key.data(), n, g.num_keys(), s->hist.data(), s->cell_start.data(), s->order.data());
   s->grid = Grid(g, false);
-  s->row_force.assign(kern::kRowSlots * static_cast<std::size_t>(g.sy()), 0.0);
+  s->row_force.assign(kern::kRowSlots * static_cast<std::size_t>(g.size(1)), 0.0);
   return s;
 }
 
@@ -341,8 +341,8 @@ std::unique_ptr<StepTemplate> build_step_template(std::size_t n) {
   grid_dims(n / 4, bx, by);
   kern::GridGeom& g = s->g;
   g.h = kH;
-  g.nx = bx + 2 * gap;
-  g.ny = by + 2 * gap;
+  g.n[0] = bx + 2 * gap;
+  g.n[1] = by + 2 * gap;
   const Material mat = bench_material();
   Particles& P = s->P;
   P = fill_rectangle(g, kPpc, gap * kH, (gap + bx) * kH, gap * kH, (gap + by) * kH, mat.rho0, 0.0, 0.0, 0);

@@ -355,9 +355,9 @@ std::string describe_scene(const Scene& sc) {
   std::ostringstream o;
   const auto& g = sc.geom;
   o << "case            " << sc.name << "\n";
-  o << "grid            " << g.nx << " x " << g.ny << " cells of " << g.h * 1e6 << " um, x in [" << g.x0 * 1e6
-    << ", " << (g.x0 + g.length_x()) * 1e6 << "] um, y in [" << g.y0 * 1e6 << ", " << (g.y0 + g.length_y()) * 1e6
-    << "] um" << (g.periodic_x ? ", periodic in x" : "") << "\n";
+  o << "grid            " << g.n[0] << " x " << g.n[1] << " cells of " << g.h * 1e6 << " um, x in [" << g.lo[0] * 1e6
+    << ", " << (g.lo[0] + g.length(0)) * 1e6 << "] um, y in [" << g.lo[1] * 1e6 << ", " << (g.lo[1] + g.length(1)) * 1e6
+    << "] um" << (g.wrap[0] ? ", periodic in x" : "") << "\n";
   o << "particles       " << sc.particles.size() << "\n";
   for (const auto& b : sc.bodies)
     o << "  body " << std::left << std::setw(10) << b.name << std::right << " material " << b.material << ", "
@@ -568,7 +568,7 @@ void RunOutputs::write_front() {
   Timed t(s_.diagnostics_seconds);
   const auto& g = scene_.geom;
   const double y =
-      front_position(sim_.particles(), static_cast<std::uint8_t>(target_), vy0_, g.y0, g.h, g.ny, vy0_ < 0);
+      front_position(sim_.particles(), static_cast<std::uint8_t>(target_), vy0_, g.lo[1], g.h, g.n[1], vy0_ < 0);
   if (std::isfinite(y)) {
     front_.row(kFrontColumns, FrontRow{sim_.time(), y});
     front_.flush();
@@ -601,7 +601,7 @@ void RunOutputs::write_series_h5() {
 void RunOutputs::write_wall() {
   if (!wall_.is_open()) return;
   Timed t(s_.diagnostics_seconds);
-  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().bottom, scene_.geom.length_x()});
+  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().bottom, scene_.geom.length(0)});
   wall_.flush();
 }
 
@@ -613,16 +613,16 @@ void RunOutputs::write_voids() {
   const auto& g = scene_.geom;
   const auto& body = scene_.bodies[target_];
   const double pixel = std::sqrt(body.area / double(body.particles)) / 3;  // [m]
-  const double period = g.periodic_x ? g.length_x() : 0.0, x1 = g.x0 + g.length_x();
+  const double period = g.wrap[0] ? g.length(0) : 0.0, x1 = g.lo[0] + g.length(0);
   const auto b = static_cast<std::uint8_t>(target_);
-  std::vector<Window> win{{g.x0, x1, -1e300, 1e300}};
-  for (const auto& r : scene_.regions) win.push_back({g.x0, x1, r.y0, r.y1});
-  const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.x0);
+  std::vector<Window> win{{g.lo[0], x1, -1e300, 1e300}};
+  for (const auto& r : scene_.regions) win.push_back({g.lo[0], x1, r.y0, r.y1});
+  const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.lo[0]);
   voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
   for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
     const auto& r = scene_.regions[k];
     if (r.body != b) continue;
-    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.y1 - r.y0) * g.length_x())});
+    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.y1 - r.y0) * g.length(0))});
   }
   voids_.flush();
 }
@@ -735,7 +735,7 @@ void RunLoop::print_start() const {
   const double left = scene_.run.end_time - sim_.time();
   std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
               "(dt %.3g ns at t = %.6g ns), %d threads, results in %s\n",
-              scene_.name.c_str(), sim_.particles().size(), scene_.geom.nx, scene_.geom.ny, scene_.geom.h * 1e6,
+              scene_.name.c_str(), sim_.particles().size(), scene_.geom.n[0], scene_.geom.n[1], scene_.geom.h * 1e6,
               left * 1e9, std::ceil(left / dt0), dt0 * 1e9, sim_.time() * 1e9, threads_, out_.string().c_str());
   std::fflush(stdout);
 }

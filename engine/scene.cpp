@@ -99,13 +99,6 @@ struct Box {
   Point lo{}, hi{};
 };
 
-// kern::GridGeom's per-axis fields by axis index.
-static_assert(kDim == 2, "grid_origin and grid_cells name the fields of a two-axis kern::GridGeom");
-double& grid_origin(kern::GridGeom& g, int a) { return a == 0 ? g.x0 : g.y0; }
-double grid_origin(const kern::GridGeom& g, int a) { return a == 0 ? g.x0 : g.y0; }
-int& grid_cells(kern::GridGeom& g, int a) { return a == 0 ? g.nx : g.ny; }
-int grid_cells(const kern::GridGeom& g, int a) { return a == 0 ? g.nx : g.ny; }
-
 // A body's bounding box (BodyInfo keeps it as x0, x1, y0, y1).
 Box body_box(const BodyInfo& b) { return {{b.x0, b.y0}, {b.x1, b.y1}}; }
 void set_body_box(BodyInfo& b, const Box& box) {
@@ -131,18 +124,18 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double 
   const double d = g.h / ppc;
   std::array<long, kDim> first{}, last{};  // lattice indices per axis
   for (int a = 0; a < kDim; ++a) {
-    const double o = grid_origin(g, a);
+    const double o = g.lo[a];
     first[a] = std::max(0L, static_cast<long>(std::floor((box.lo[a] - o) / d - 0.5)));
-    last[a] = std::min(static_cast<long>(grid_cells(g, a)) * ppc - 1, static_cast<long>(std::ceil((box.hi[a] - o) / d)));
+    last[a] = std::min(static_cast<long>(g.n[a]) * ppc - 1, static_cast<long>(std::ceil((box.hi[a] - o) / d)));
   }
   std::size_t n = 0;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) P.resize(n);
     std::size_t k = 0;
     for (long b = first[1]; b <= last[1]; ++b) {
-      const double y = g.y0 + (b + 0.5) * d;
+      const double y = g.lo[1] + (b + 0.5) * d;
       for (long a = first[0]; a <= last[0]; ++a) {
-        const double x = g.x0 + (a + 0.5) * d;
+        const double x = g.lo[0] + (a + 0.5) * d;
         if (!inside(Point{x, y})) continue;
         if (pass == 1) {
           P.x[k] = x;
@@ -281,7 +274,7 @@ void read_grid(CaseReader& top, Scene& s) {
   bool too_many = false;
   std::string keys = "case keys 'grid.cell_size'", counts;
   for (int a = 0; a < kDim; ++a) {
-    grid_origin(s.geom, a) = range.lo[a];
+    s.geom.lo[a] = range.lo[a];
     f[a] = (range.hi[a] - range.lo[a]) / h;
     cells *= f[a];
     too_many = too_many || !(f[a] <= 1e8);
@@ -295,17 +288,17 @@ void read_grid(CaseReader& top, Scene& s) {
                     "or a smaller domain, or raise run.max_memory_gb");
   constexpr const char* kExtent[] = {"width", "height", "depth"};
   for (int a = 0; a < kDim; ++a) {
-    const int n = grid_cells(s.geom, a) = static_cast<int>(std::lround(f[a]));
+    const int n = s.geom.n[a] = static_cast<int>(std::lround(f[a]));
     if (std::fabs(f[a] - n) > 1e-6 * f[a] || n < 1)
       throw CaseError("case key 'grid." + axis_key(a, "_range") + "': " + kExtent[a] + " " +
                       format_number((range.hi[a] - range.lo[a]) * 1e6, 10) + " um is not a whole number of cells of "
                       "'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
   }
-  s.geom.periodic_x = r.boolean("periodic_x", false);
+  s.geom.wrap[0] = r.boolean("periodic_x", false);
   s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
-  if (s.geom.periodic_x && s.geom.nx < 4)
+  if (s.geom.wrap[0] && s.geom.n[0] < 4)
     throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
-                    std::to_string(s.geom.nx));
+                    std::to_string(s.geom.n[0]));
   r.finish();
 }
 
@@ -345,7 +338,7 @@ void read_walls(CaseReader& top, Scene& s) {
     s.solver.walls.lo[a] = wall_kind(r.choice(kKeys[a][0], kinds, "none"));
     s.solver.walls.hi[a] = wall_kind(r.choice(kKeys[a][1], kinds, "none"));
   }
-  if (s.geom.periodic_x && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
+  if (s.geom.wrap[0] && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
     throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
   r.finish();
 }
@@ -598,8 +591,8 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
 void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Particles& P, BodyInfo& info) {
   CaseReader v = r.table("voids");
   const VoidSpec spec = read_voids(v, s, ppc, box);
-  const double period = s.geom.periodic_x ? s.geom.length_x() : 0.0;
-  const auto res = cut_voids(P, s.geom.h / ppc, s.geom.x0, s.geom.y0, box.lo[0], box.hi[0], box.lo[1], box.hi[1],
+  const double period = s.geom.wrap[0] ? s.geom.length(0) : 0.0;
+  const auto res = cut_voids(P, s.geom.h / ppc, s.geom.lo[0], s.geom.lo[1], box.lo[0], box.hi[0], box.lo[1], box.hi[1],
                              spec, period);
   if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
     throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
@@ -616,7 +609,7 @@ void check_in_grid(const CaseReader& r, const Scene& s, const BodyInfo& info, co
   bool out = false;
   std::string extent;
   for (int a = 0; a < kDim; ++a) {
-    const double g0 = grid_origin(s.geom, a), g1 = g0 + grid_cells(s.geom, a) * s.geom.h;
+    const double g0 = s.geom.lo[a], g1 = g0 + s.geom.n[a] * s.geom.h;
     out = out || box.lo[a] < g0 - tol || box.hi[a] > g1 + tol;
     extent += (a ? " x [" : "[") + std::to_string(g0) + ", " + std::to_string(g1) + "]";
   }
@@ -628,7 +621,7 @@ void check_in_grid(const CaseReader& r, const Scene& s, const BodyInfo& info, co
 void claim_sites(const std::vector<CaseReader>& bodies, std::size_t b, const Scene& s, BodyLattice& L, const Particles& P) {
   const double d = s.geom.h / L.ppc;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const long long a = std::llround((P.x[i] - s.geom.x0) / d - 0.5), c = std::llround((P.y[i] - s.geom.y0) / d - 0.5);
+    const long long a = std::llround((P.x[i] - s.geom.lo[0]) / d - 0.5), c = std::llround((P.y[i] - s.geom.lo[1]) / d - 0.5);
     auto [pos, fresh] = L.taken.emplace(c * (1LL << 32) + a, b);
     if (!fresh)
       throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + bodies[b].path() + "' overlap near (" +
@@ -704,7 +697,7 @@ void check_contact(Scene& s, double void_reach_cells) {
   if (s.solver.scheme != Scheme::USL)
     throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
   assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
-                    s.geom.periodic_x ? s.geom.length_x() : 0.0, s.solver.void_face_fields);
+                    s.geom.wrap[0] ? s.geom.length(0) : 0.0, s.solver.void_face_fields);
 }
 
 // [[bodies]]; returns the points per cell they share. The body named "target" (else body 0)
@@ -715,7 +708,7 @@ int read_bodies(CaseReader& top, Scene& s, const MaterialIndex& mat_index, doubl
   if (bodies.size() > 255) throw CaseError("case array [[bodies]]: at most 255 bodies, got " + std::to_string(bodies.size()));
   BodyLattice L;
   double cells = 1.0;
-  for (int a = 0; a < kDim; ++a) cells *= double(grid_cells(s.geom, a));
+  for (int a = 0; a < kDim; ++a) cells *= double(s.geom.n[a]);
   L.grid_bytes = grid_bytes(cells);
   for (std::size_t b = 0; b < bodies.size(); ++b) read_body(bodies, b, s, mat_index, L);
   s.solver.ugimp_lp = 0.5 / L.ppc;
@@ -729,7 +722,7 @@ int read_bodies(CaseReader& top, Scene& s, const MaterialIndex& mat_index, doubl
 // [[regions]]: bands across the full width, heights measured from the impact plane y = 0
 void read_regions(CaseReader& top, Scene& s) {
   // a band's width for its open porosity: the grid's with periodic sides, else the body's
-  auto band_width = [&](std::size_t b) { return s.geom.periodic_x ? s.geom.length_x() : s.bodies[b].x1 - s.bodies[b].x0; };
+  auto band_width = [&](std::size_t b) { return s.geom.wrap[0] ? s.geom.length(0) : s.bodies[b].x1 - s.bodies[b].x0; };
   auto regions = top.tables("regions");
   if (regions.empty()) {
     // the study's bands, for a target reaching 1000 um above the impact plane or more; a
@@ -761,7 +754,7 @@ void read_regions(CaseReader& top, Scene& s) {
 // must be free: no point of another body within a point spacing above the row, no top wall there.
 void add_free_surfaces(Scene& s, double d) {
   const Particles& P = s.particles;
-  const double grid_top = s.geom.y0 + s.geom.length_y();
+  const double grid_top = s.geom.lo[1] + s.geom.length(1);
   for (std::size_t b = 0; b < s.bodies.size(); ++b) {
     if (!s.bodies[b].record_free_surface) continue;
     FreeSurface f{s.bodies[b].name, top_row(P, static_cast<std::uint8_t>(b), d)};

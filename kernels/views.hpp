@@ -50,31 +50,31 @@ struct NodeBox {
   }
 };
 
-// Uniform 2D grid of cells of size h. Nodes (i, j), i in [0, nx], j in [0, ny], sit at
-// (x0 + i h, y0 + j h). Node storage carries `pad` ghost columns/rows on every side so that
-// stencils of particles near the domain edge never need a bounds check; with periodic x the
-// real columns are 0..nx-1 and ghosts are folded onto them after each scatter.
+// Uniform grid of cells of size h over kDim axes. Node i (one index per axis, 0 <= i_d <= n_d)
+// sits at lo_d + i_d h. Node storage carries `pad` ghost layers on every side so that stencils
+// of particles near the domain edge never need a bounds check; along a periodic axis the real
+// nodes are 0 .. n_d - 1 and the ghosts are folded onto them after each scatter (the halo phase).
 struct GridGeom {
-  double h = 1.0, x0 = 0.0, y0 = 0.0;
-  int nx = 1, ny = 1;   // cells
-  int pad = 2;          // ghost nodes per side (>= 2 serves every shape function here)
-  int tile = 16;        // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
-  bool periodic_x = false;
+  double h = 1.0;
+  double lo[kDim] = {};    // origin [m]
+  int n[kDim] = {1, 1};    // cells per axis
+  bool wrap[kDim] = {};    // periodic axes
+  int pad = 2;             // ghost nodes per side (>= 2 serves every shape function here)
+  int tile = 16;           // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
 
   // per axis: cells, origin [m], periodicity, storage length (nodes with ghosts), storage stride
-  int cells(int d) const { return d == 0 ? nx : ny; }
-  double origin(int d) const { return d == 0 ? x0 : y0; }
-  bool periodic(int d) const { return d == 0 && periodic_x; }
+  int cells(int d) const { return n[d]; }
+  double origin(int d) const { return lo[d]; }
+  bool periodic(int d) const { return wrap[d]; }
+  double length(int d) const { return n[d] * h; }  // [m]
   int size(int d) const { return cells(d) + 1 + 2 * pad; }
   std::size_t stride(int d) const {
     std::size_t s = 1;
     for (int e = 0; e < d; ++e) s *= static_cast<std::size_t>(size(e));
     return s;
   }
-  int sx() const { return size(0); }  // storage row length
-  int sy() const { return size(1); }
   std::size_t num_nodes() const { return stride(kDim); }
-  // storage lines along x (axis 0): num_nodes() / sx()
+  // storage lines along x (axis 0): num_nodes() / size(0)
   int num_lines() const { return static_cast<int>(num_nodes() / static_cast<std::size_t>(size(0))); }
   // storage index of node i (components down to -pad), and of the line along x it lies on
   std::size_t node(const Idx<kDim>& i) const {
@@ -102,8 +102,6 @@ struct GridGeom {
     return k;
   }
   std::size_t num_keys() const { return static_cast<std::size_t>(num_tiles()) * cells_per_tile(); }
-  double length_x() const { return nx * h; }
-  double length_y() const { return ny * h; }
   NodeBox all_nodes() const {
     NodeBox b;
     for (int d = 0; d < kDim; ++d) {

@@ -20,9 +20,9 @@ namespace {
 double slope_acceleration(double theta_deg, double mu) {
   kern::GridGeom g;
   g.h = 0.02;
-  g.nx = 50;
-  g.ny = 20;
-  g.periodic_x = true;
+  g.n[0] = 50;
+  g.n[1] = 20;
+  g.wrap[0] = true;
   SolverConfig cfg;
   cfg.contact = true;
   cfg.friction = mu;

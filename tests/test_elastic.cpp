@@ -34,8 +34,8 @@ BarResult bar(kern::ShapeKind shape, double h, Scheme scheme, Transfer transfer)
   const double L = 25.0;
   kern::GridGeom g;
   g.h = h;
-  g.nx = static_cast<int>(std::lround(30.0 / h));
-  g.ny = 1;
+  g.n[0] = static_cast<int>(std::lround(30.0 / h));
+  g.n[1] = 1;
   SolverConfig cfg;
   cfg.shape = shape;
   cfg.scheme = scheme;
@@ -102,7 +102,7 @@ TEST_CASE("two colliding elastic disks conserve energy", "[verification][elastic
   for (auto [scheme, h] : {std::pair{Scheme::MUSL, 0.025}, std::pair{Scheme::USL, 0.0125}}) {
     kern::GridGeom g;
     g.h = h;
-    g.nx = g.ny = static_cast<int>(std::lround(1.0 / h));
+    g.n[0] = g.n[1] = static_cast<int>(std::lround(1.0 / h));
     SolverConfig cfg;
     cfg.shape = kern::ShapeKind::Quadratic;
     cfg.transfer = Transfer::FLIP;
@@ -148,9 +148,9 @@ TEST_CASE("two colliding elastic disks conserve energy", "[verification][elastic
 TEST_CASE("periodic sides: a translating block returns to its start", "[verification][elastic]") {
   kern::GridGeom g;
   g.h = 0.05;
-  g.nx = 20;  // L = 1
-  g.ny = 12;
-  g.periodic_x = true;
+  g.n[0] = 20;  // L = 1
+  g.n[1] = 12;
+  g.wrap[0] = true;
   // (the linear hat is left out: a uniform translation crosses cells, see the bar test)
   for (auto shape : {kern::ShapeKind::UGIMP, kern::ShapeKind::Quadratic, kern::ShapeKind::Cubic}) {
     SolverConfig cfg;
@@ -177,9 +177,9 @@ TEST_CASE("periodic sides: a translating block returns to its start", "[verifica
 TEST_CASE("determinism: bitwise-identical particle arrays with 1 and 2 threads", "[determinism]") {
   kern::GridGeom g;
   g.h = 1e-3;
-  g.nx = 48;
-  g.ny = 40;
-  g.periodic_x = true;
+  g.n[0] = 48;
+  g.n[1] = 40;
+  g.wrap[0] = true;
   const int threads0 = omp_get_max_threads();
   for (auto transfer : {Transfer::APIC, Transfer::FLIP})
     for (auto scheme : {Scheme::USL, Scheme::MUSL}) {

@@ -16,9 +16,9 @@ using namespace smpm;
 TEST_CASE("heat conduction: 1D temperature step against the erf solution", "[verification][heat]") {
   kern::GridGeom g;
   g.h = 0.01;
-  g.nx = 4;
-  g.ny = 100;
-  g.periodic_x = true;
+  g.n[0] = 4;
+  g.n[1] = 100;
+  g.wrap[0] = true;
   Material m;
   m.name = "conductor";
   m.eos = EosKind::Linear;

@@ -38,11 +38,11 @@ std::vector<double>& component(Grid& G, NodeArray a, int d) {
 GridGeom make_geom(bool periodic) {
   GridGeom g;
   g.h = 0.01;
-  g.x0 = -0.1;
-  g.y0 = 0.2;
-  g.nx = 37;  // not a multiple of the tile width on purpose
-  g.ny = 29;
-  g.periodic_x = periodic;
+  g.lo[0] = -0.1;
+  g.lo[1] = 0.2;
+  g.n[0] = 37;  // not a multiple of the tile width on purpose
+  g.n[1] = 29;
+  g.wrap[0] = periodic;
   return g;
 }
 
@@ -50,9 +50,9 @@ GridGeom make_geom(bool periodic) {
 // random velocity, velocity gradient and stress.
 Particles random_particles(const GridGeom& g, std::size_t n, unsigned seed) {
   std::mt19937_64 rng(seed);
-  const double mx = g.periodic_x ? 0.0 : 2 * g.h;
-  std::uniform_real_distribution<double> X(g.x0 + mx, g.x0 + g.length_x() - mx);
-  std::uniform_real_distribution<double> Y(g.y0 + 2 * g.h, g.y0 + g.length_y() - 2 * g.h);
+  const double mx = g.wrap[0] ? 0.0 : 2 * g.h;
+  std::uniform_real_distribution<double> X(g.lo[0] + mx, g.lo[0] + g.length(0) - mx);
+  std::uniform_real_distribution<double> Y(g.lo[1] + 2 * g.h, g.lo[1] + g.length(1) - 2 * g.h);
   std::uniform_real_distribution<double> U(-1.0, 1.0);
   Particles P;
   P.resize(n);
@@ -143,7 +143,7 @@ void check_sort(const GridGeom& g, const Particles& P) {
   // the key maps back to the cell holding the particle (grid units as the transfers compute them)
   for (std::size_t i = 0; i < P.size(); i += 97) {
     const double inv_h = 1.0 / g.h;
-    const int cx = static_cast<int>((P.x[i] - g.x0) * inv_h), cy = static_cast<int>((P.y[i] - g.y0) * inv_h);
+    const int cx = static_cast<int>((P.x[i] - g.lo[0]) * inv_h), cy = static_cast<int>((P.y[i] - g.lo[1]) * inv_h);
     const int t = b1.key[i] / g.cells_per_tile(), l = b1.key[i] % g.cells_per_tile();
     REQUIRE((t % g.tiles(0)) * g.tile + l % g.tile == cx);
     REQUIRE((t / g.tiles(0)) * g.tile + l / g.tile == cy);
@@ -187,11 +187,11 @@ TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any t
     g.h = 0.1;  // 1 / 0.1 is inexact: (x - x0) * inv_h and (x - x0) / h differ on some edges
     const double inv_h = 1.0 / g.h;
     std::vector<double> x, y;
-    for (int i = 0; i < g.nx; ++i) {
-      const double e = g.x0 + i * g.h;
+    for (int i = 0; i < g.n[0]; ++i) {
+      const double e = g.lo[0] + i * g.h;
       for (double xi : {std::nextafter(e, -1e9), e, std::nextafter(e, 1e9), e + 0.5 * g.h}) {
         x.push_back(xi);
-        y.push_back(g.y0 + (i % g.ny) * g.h);  // on a row edge too
+        y.push_back(g.lo[1] + (i % g.n[1]) * g.h);  // on a row edge too
       }
     }
     std::vector<std::uint32_t> key(x.size());
@@ -199,8 +199,8 @@ TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any t
     // only the point just below x0 is outside
     REQUIRE(first == 0);
     for (std::size_t i = 1; i < x.size(); ++i) {
-      const int cx = static_cast<int>(std::floor((x[i] - g.x0) * inv_h));
-      const int cy = static_cast<int>(std::floor((y[i] - g.y0) * inv_h));
+      const int cx = static_cast<int>(std::floor((x[i] - g.lo[0]) * inv_h));
+      const int cy = static_cast<int>(std::floor((y[i] - g.lo[1]) * inv_h));
       const int tx = cx / tile, ty = cy / tile;
       const auto expect = static_cast<std::uint32_t>((ty * g.tiles(0) + tx) * g.cells_per_tile() +
                                                      (cy - ty * tile) * tile + (cx - tx * tile));
@@ -213,7 +213,7 @@ TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any t
 TEST_CASE("sort: a particle outside the grid is reported", "[sort]") {
   const GridGeom g = make_geom(false);
   Particles P = random_particles(g, 100, 3);
-  P.y[42] = g.y0 - 1e-9;
+  P.y[42] = g.lo[1] - 1e-9;
   P.x[77] = std::nan("");
   std::vector<std::uint32_t> key(P.size());
   REQUIRE(compute_keys(g, xy(P.x.data(), P.y.data()).data(), P.size(), key.data()) == 42);
@@ -239,7 +239,7 @@ void check_conservation(bool periodic) {
   auto affine_L = [&](std::size_t i) {
     double w[S::N], dw[S::N];
     double D[2] = {0, 0};
-    const double xg[2] = {(P.x[i] - g.x0) / g.h, (P.y[i] - g.y0) / g.h};
+    const double xg[2] = {(P.x[i] - g.lo[0]) / g.h, (P.y[i] - g.lo[1]) / g.h};
     for (int d = 0; d < 2; ++d) {
       const int b = S::eval(xg[d], 0.25, w, dw);
       for (int a = 0; a < S::N; ++a) D[d] += w[a] * (b + a - xg[d]) * (b + a - xg[d]) * g.h * g.h;
@@ -255,8 +255,8 @@ void check_conservation(bool periodic) {
     Lz += affine_L(i);
   }
   double gm = 0, gpx = 0, gpy = 0, gL = 0;
-  int i0 = periodic ? 0 : -g.pad, i1 = periodic ? g.nx - 1 : g.nx + g.pad;
-  for (int j = -g.pad; j <= g.ny + g.pad; ++j)
+  int i0 = periodic ? 0 : -g.pad, i1 = periodic ? g.n[0] - 1 : g.n[0] + g.pad;
+  for (int j = -g.pad; j <= g.n[1] + g.pad; ++j)
     for (int i = i0; i <= i1; ++i) {
       const auto n = g.node(i, j);
       gm += G.m[n];
@@ -264,7 +264,7 @@ void check_conservation(bool periodic) {
       gpy += G.p[1][n];
       Fx += G.f[0][n];
       Fy += G.f[1][n];
-      gL += (g.x0 + i * g.h) * G.p[1][n] - (g.y0 + j * g.h) * G.p[0][n];
+      gL += (g.lo[0] + i * g.h) * G.p[1][n] - (g.lo[1] + j * g.h) * G.p[0][n];
     }
   CHECK(gm == Approx(M).epsilon(1e-13));
   CHECK(gpx == Approx(Px).epsilon(1e-12).margin(1e-10));
@@ -422,22 +422,22 @@ namespace {
 template <class S>
 void check_occupied_box(bool periodic) {
   GridGeom g = make_geom(periodic);
-  g.nx = 61;
-  g.ny = 45;
+  g.n[0] = 61;
+  g.n[1] = 45;
   g.tile = 8;  // the boxes below are in tiles of 8 cells
   Particles P = random_particles(g, 4000, 21);
   std::mt19937_64 rng(3);
-  std::uniform_real_distribution<double> X(g.x0 + 17.3 * g.h, g.x0 + 40.6 * g.h), Y(g.y0 + 9.5 * g.h, g.y0 + 25.2 * g.h);
+  std::uniform_real_distribution<double> X(g.lo[0] + 17.3 * g.h, g.lo[0] + 40.6 * g.h), Y(g.lo[1] + 9.5 * g.h, g.lo[1] + 25.2 * g.h);
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (!periodic) P.x[i] = X(rng);
     P.y[i] = Y(rng);
   }
   // the stencils' extremes: a point on the lower edge of a tile's first cell (it reaches the
   // node below that cell) and one at the top of a tile's last cell (two nodes above it)
-  P.x[0] = g.x0 + 16 * g.h;
-  P.y[0] = g.y0 + 24 * g.h;
-  P.x[1] = g.x0 + 47.999 * g.h;
-  P.y[1] = g.y0 + 31.999 * g.h;
+  P.x[0] = g.lo[0] + 16 * g.h;
+  P.y[0] = g.lo[1] + 24 * g.h;
+  P.x[1] = g.lo[0] + 47.999 * g.h;
+  P.y[1] = g.lo[1] + 31.999 * g.h;
   Bins b = bin(g, P);
   const NodeBox box = occupied_nodes(g, b.start.data());
   // the box is the occupied tiles' node blocks, not the grid
@@ -445,7 +445,7 @@ void check_occupied_box(bool periodic) {
   REQUIRE(box.hi[1] == 31 + 2);
   if (periodic) {
     REQUIRE(box.lo[0] == -g.pad);
-    REQUIRE(box.hi[0] == g.nx + g.pad);
+    REQUIRE(box.hi[0] == g.n[0] + g.pad);
   } else {
     REQUIRE(box.lo[0] == 16 - 1);
     REQUIRE(box.hi[0] == 47 + 2);
@@ -496,8 +496,8 @@ void check_occupied_box(bool periodic) {
     REQUIRE(rfa == rfb);  // wall reactions, 0 on the rows outside the box
     // inside the box the grids agree; outside, the box pass wrote nothing
     std::size_t outside = 0;
-    for (int j = -g.pad; j <= g.ny + g.pad; ++j)
-      for (int i = -g.pad; i <= g.nx + g.pad; ++i) {
+    for (int j = -g.pad; j <= g.n[1] + g.pad; ++j)
+      for (int i = -g.pad; i <= g.n[0] + g.pad; ++i) {
         const auto n = g.node(i, j);
         const bool in = i >= box.lo[0] && i <= box.hi[0] && j >= box.lo[1] && j <= box.hi[1];
         outside += !in;
@@ -686,7 +686,7 @@ TEST_CASE("weld of void faces: centre of mass, merged scatter velocity, loss 1/2
   c.weld = true;
   c.volume_fraction = 0.8;
   c.midstep = true;
-  std::vector<double> loss(static_cast<std::size_t>(g.sy()), 0.0);
+  std::vector<double> loss(static_cast<std::size_t>(g.size(1)), 0.0);
   grid_contact(g, g.all_nodes(), G, q, c, loss.data());
   CHECK(G.v[0][full] == Approx((2 * 1.5 + 1 * -1.0) / 3));
   CHECK(G.v[0][full + fs] == G.v[0][full]);
@@ -739,7 +739,7 @@ TEST_CASE("weld of four void-face fields: centre of mass of the fields present, 
   c.weld = true;
   c.volume_fraction = 0.9;
   c.midstep = true;
-  std::vector<double> loss(static_cast<std::size_t>(g.sy()), 0.0);
+  std::vector<double> loss(static_cast<std::size_t>(g.size(1)), 0.0);
   grid_contact(g, g.all_nodes(), G, q, c, loss.data());
   const double M = 4.0, cx = (2 * 1.5 - 1.0 + 2.0) / M, ux = (2 * 1.0 - 2.0 + 4.0) / M, uy = (0.0 + 1.0 - 1.0) / M;
   double expected = 0.0, mom = 0.0;

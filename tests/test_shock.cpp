@@ -37,14 +37,14 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 
 // Mean over rows of -sigma_yy of the body's particles, per row of height h.
 std::vector<double> row_mean(const Particles& P, const kern::GridGeom& g, const std::vector<double>& value) {
-  std::vector<double> sum(g.ny, 0.0), cnt(g.ny, 0.0);
+  std::vector<double> sum(g.n[1], 0.0), cnt(g.n[1], 0.0);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const int r = static_cast<int>((P.y[i] - g.y0) / g.h);
-    if (r < 0 || r >= g.ny) continue;
+    const int r = static_cast<int>((P.y[i] - g.lo[1]) / g.h);
+    if (r < 0 || r >= g.n[1]) continue;
     sum[r] += value[i];
     cnt[r] += 1;
   }
-  for (int r = 0; r < g.ny; ++r) sum[r] = cnt[r] > 0 ? sum[r] / cnt[r] : 0.0;
+  for (int r = 0; r < g.n[1]; ++r) sum[r] = cnt[r] > 0 ? sum[r] / cnt[r] : 0.0;
   return sum;
 }
 
@@ -68,11 +68,11 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
     sim.step(t_end - sim.time());
     const double t = sim.time();
     if (t > 0.5 * t_end) {
-      wall_sum += sim.wall_forces().bottom / g.length_x();
+      wall_sum += sim.wall_forces().bottom / g.length(0);
       wall_n += 1;
     }
     if (sim.steps() % 10 == 0 && t > 0.2 * t_end) {
-      const double y = front_position(sim.particles(), 0, -v, g.y0, g.h, g.ny, true);
+      const double y = front_position(sim.particles(), 0, -v, g.lo[1], g.h, g.n[1], true);
       tf.push_back(t);
       yf.push_back(y);
       // elastic precursor: leading edge where the row mean of -sigma_yy passes HEL / 2
@@ -80,11 +80,11 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
       std::vector<double> syy(P.size());
       for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + (P.q.empty() ? 0.0 : P.q[i]) - P.syy[i];
       const auto row = row_mean(P, g, syy);
-      for (int k = g.ny - 1; k > 0; --k)
+      for (int k = g.n[1] - 1; k > 0; --k)
         if (row[k] > 0.5 * hel) {
-          const double a = row[k + 1 < g.ny ? k + 1 : k], b = row[k];
+          const double a = row[k + 1 < g.n[1] ? k + 1 : k], b = row[k];
           tp.push_back(t);
-          yp.push_back(g.y0 + (k + 0.5) * g.h + g.h * (b - 0.5 * hel) / std::max(b - a, 1e-30));
+          yp.push_back(g.lo[1] + (k + 0.5) * g.h + g.h * (b - 0.5 * hel) / std::max(b - a, 1e-30));
           break;
         }
     }
@@ -95,7 +95,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   r.energy_error = (sim.energy().total() - E0) / E0;
   r.precursor_speed = slope(tp, yp) + v;
   // averages behind the shock, away from the wall's start-up layer and from the front
-  const double front = front_position(P, 0, -v, g.y0, g.h, g.ny, true);
+  const double front = front_position(P, 0, -v, g.lo[1], g.h, g.n[1], true);
   const Thermo th(mat);
   double n = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
@@ -115,7 +115,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + P.q[i] - P.syy[i];
   const auto row = row_mean(P, g, syy);
   const double ymid = 0.5 * (front + yp.back());
-  r.precursor_amplitude = row[static_cast<int>((ymid - g.y0) / g.h)];
+  r.precursor_amplitude = row[static_cast<int>((ymid - g.lo[1]) / g.h)];
   return r;
 }
 

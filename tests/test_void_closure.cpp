@@ -150,9 +150,9 @@ TEST_CASE("close_cracks: the same for any thread count", "[unit][porous][determi
 TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are full and one is welded", "[unit][porous]") {
   GridGeom g;
   g.h = 1e-6;
-  g.nx = 8;
-  g.ny = 8;
-  g.periodic_x = true;
+  g.n[0] = 8;
+  g.n[1] = 8;
+  g.wrap[0] = true;
   const std::size_t nn = g.num_nodes();
   std::vector<double> m(2 * nn, 0.0), vol(2 * nn, 0.0);
   // field 0 fills the grid, field 1 has a sliver of mass everywhere: every node full and welded
@@ -186,7 +186,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   CHECK(int(field[4]) == 0);
   // an unfilled node across the periodic seam keeps point 4 in field 1
   std::vector<std::uint8_t> f2{1};
-  vol[g.node(g.nx - 1, 1)] = 0.0;
+  vol[g.node(g.n[0] - 1, 1)] = 0.0;
   CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(&x[4], &y[4]).data(), f2.data(), 1, q, state.data()) == 0);
   CHECK(int(f2[0]) == 1);
 }
@@ -194,8 +194,8 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
 TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full counts all fields", "[unit][porous]") {
   GridGeom g;
   g.h = 1e-6;
-  g.nx = 8;
-  g.ny = 8;
+  g.n[0] = 8;
+  g.n[1] = 8;
   const std::size_t nn = g.num_nodes();
   std::vector<double> m(4 * nn, 0.0), vol(4 * nn, 0.0);
   // fields 2 and 3 fill the grid between them (0.5 + 0.45 of a cell), field 0 and 1 absent
