@@ -33,6 +33,17 @@ struct Particles {
   std::vector<std::uint8_t> field;
 
   std::size_t size() const { return x.size(); }
+  // Component arrays by axis: position and velocity (axis d), stress deviator (symmetric
+  // component k, kernels/tensor.hpp's order), velocity gradient and affine matrix (row r,
+  // column c).
+  std::vector<double>& pos(int d) { return d == 0 ? x : y; }
+  const std::vector<double>& pos(int d) const { return d == 0 ? x : y; }
+  std::vector<double>& vel(int d) { return d == 0 ? vx : vy; }
+  const std::vector<double>& vel(int d) const { return d == 0 ? vx : vy; }
+  std::vector<double>& dev(int k) { return k == 0 ? sxx : k == 1 ? syy : sxy; }
+  const std::vector<double>& dev(int k) const { return k == 0 ? sxx : k == 1 ? syy : sxy; }
+  std::vector<double>& grad(int r, int c) { return r == 0 ? (c == 0 ? Lxx : Lxy) : (c == 0 ? Lyx : Lyy); }
+  std::vector<double>& affine(int r, int c) { return r == 0 ? (c == 0 ? Cxx : Cxy) : (c == 0 ? Cyx : Cyy); }
   void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)
   void enable_affine(bool on);  // allocate (zeroed) or release the APIC matrix
   // allocate (zeroed) or release one optional scalar field
