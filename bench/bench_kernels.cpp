@@ -164,21 +164,21 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double d = kH / kPpc;
   for (std::size_t i = 0; i < n; ++i) {
-    P.x[i] += 0.4 * d * u(rng);
-    P.y[i] += 0.4 * d * u(rng);
-    P.vx[i] = 10.0 * u(rng);
-    P.vy[i] = 10.0 * u(rng);
-    P.Lxx[i] = 1e3 * u(rng);
-    P.Lxy[i] = 1e3 * u(rng);
-    P.Lyx[i] = 1e3 * u(rng);
-    P.Lyy[i] = 1e3 * u(rng);
-    P.Cxx[i] = 1e3 * u(rng);
-    P.Cxy[i] = 1e3 * u(rng);
-    P.Cyx[i] = 1e3 * u(rng);
-    P.Cyy[i] = 1e3 * u(rng);
-    P.sxx[i] = 1e7 * u(rng);
-    P.syy[i] = 1e7 * u(rng);
-    P.sxy[i] = 1e7 * u(rng);
+    P.x[0][i] += 0.4 * d * u(rng);
+    P.x[1][i] += 0.4 * d * u(rng);
+    P.v[0][i] = 10.0 * u(rng);
+    P.v[1][i] = 10.0 * u(rng);
+    P.L[0][i] = 1e3 * u(rng);
+    P.L[1][i] = 1e3 * u(rng);
+    P.L[2][i] = 1e3 * u(rng);
+    P.L[3][i] = 1e3 * u(rng);
+    P.C[0][i] = 1e3 * u(rng);
+    P.C[1][i] = 1e3 * u(rng);
+    P.C[2][i] = 1e3 * u(rng);
+    P.C[3][i] = 1e3 * u(rng);
+    P.s[0][i] = 1e7 * u(rng);
+    P.s[1][i] = 1e7 * u(rng);
+    P.s[2][i] = 1e7 * u(rng);
     P.p[i] = 1e8 * u(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
@@ -307,8 +307,8 @@ void BM_G2P(benchmark::State& state) {
   auto pv = s->P.view();
   // G2P overwrites velocities, gradients and the APIC matrix: keep the shared state as built.
   Particles& P = s->P;
-  std::vector<double>* written[] = {&P.vx, &P.vy, &P.Lxx, &P.Lxy, &P.Lyx, &P.Lyy,
-                                    &P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy};
+  std::vector<double>* written[] = {&P.v[0], &P.v[1], &P.L[0], &P.L[1], &P.L[2], &P.L[3],
+                                    &P.C[0], &P.C[1], &P.C[2], &P.C[3]};
   std::vector<std::vector<double>> saved;
   for (auto* v : written) saved.push_back(*v);
   // dt = 0: same arithmetic as a real step (x += dt v), but repeated gathers cannot walk the
@@ -354,8 +354,8 @@ std::unique_ptr<StepTemplate> build_step_template(std::size_t n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double dv = 1e-4 * wave_speed();  // ~0.6 m/s
   for (std::size_t i = 0; i < n; ++i) {
-    P.vx[i] = dv * u(rng);
-    P.vy[i] = dv * u(rng);
+    P.v[0][i] = dv * u(rng);
+    P.v[1][i] = dv * u(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
   if (!sort_particles(g, P)) s->error = "a particle lies outside the grid";

@@ -112,9 +112,15 @@ std::uint64_t state_hash(const smpm::Particles& P) {
     const auto* b = static_cast<const unsigned char*>(data);
     for (std::size_t i = 0; i < bytes; ++i) h = (h ^ b[i]) * 1099511628211ull;
   };
-  for (const auto* a : {&P.x, &P.y, &P.vx, &P.vy, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy,
-                        &P.e, &P.epsp, &P.q})
-    add(a->data(), a->size() * sizeof(double));
+  std::vector<const std::vector<double>*> arrays;
+  for (const auto& a : P.x) arrays.push_back(&a);
+  for (const auto& a : P.v) arrays.push_back(&a);
+  arrays.push_back(&P.V);
+  for (const auto& a : P.s) arrays.push_back(&a);
+  arrays.push_back(&P.p);
+  for (const auto& a : P.C) arrays.push_back(&a);
+  for (const auto* a : {&P.e, &P.epsp, &P.q}) arrays.push_back(a);
+  for (const auto* a : arrays) add(a->data(), a->size() * sizeof(double));
   add(P.id.data(), P.id.size() * sizeof(P.id[0]));
   return h;
 }

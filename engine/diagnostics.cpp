@@ -12,9 +12,9 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
   std::vector<int> count(rows, 0);
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (P.body[i] != body) continue;
-    const int r = static_cast<int>(std::floor((P.y[i] - y0) / dy));
+    const int r = static_cast<int>(std::floor((P.pos(1)[i] - y0) / dy));
     if (r < 0 || r >= rows) continue;
-    sum[r] += P.vy[i];
+    sum[r] += P.vel(1)[i];
     ++count[r];
   }
   const double level = 0.5 * std::fabs(vy0);
@@ -82,7 +82,7 @@ Moments moments(const std::vector<double>& v) {
 // it made a band's open porosity -40 instead of +0.02. An unstressed point at rho0 holds V
 // either way.
 static double solid_volume(const Particles& P, std::size_t i, const Material& mat) {
-  const bool fractured = P.p[i] == 0.0 && P.sxx[i] == 0.0 && P.syy[i] == 0.0 && P.sxy[i] == 0.0;
+  const bool fractured = P.p[i] == 0.0 && P.dev(0)[i] == 0.0 && P.dev(1)[i] == 0.0 && P.dev(2)[i] == 0.0;
   if (!fractured || mat.rho0 <= 0.0) return P.V[i];
   const double rho_zp = mat.eos == EosKind::MieGruneisen && !P.e.empty()
                             ? mat.mie_gruneisen().zero_pressure_density(P.e[i])
@@ -101,13 +101,13 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
   for (std::size_t i = 0; i < P.size(); ++i) {
     for (std::size_t r = 0; r < nr; ++r) {
       const Region& g = regions[r];
-      if (P.body[i] != g.body || P.y[i] < g.y0 || P.y[i] > g.y1) continue;
+      if (P.body[i] != g.body || P.pos(1)[i] < g.y0 || P.pos(1)[i] > g.y1) continue;
       const int k = body_material[P.body[i]];
       p[r].push_back(P.p[i]);
       T[r].push_back(particle_temperature(P, i, thermo[k], materials[k]));
       rho[r].push_back(P.m[i] / P.V[i]);
-      uy[r].push_back(P.vy[i]);
-      const auto gm = gradient_measures(P.Lxx[i], P.Lxy[i], P.Lyx[i], P.Lyy[i]);
+      uy[r].push_back(P.vel(1)[i]);
+      const auto gm = gradient_measures(P.grad(0, 0)[i], P.grad(0, 1)[i], P.grad(1, 0)[i], P.grad(1, 1)[i]);
       out[r].R2 += gm.R2;
       out[r].D2 += gm.D2;
       out[r].S2 += gm.S2;
@@ -156,13 +156,13 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
     const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
-    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.y[p] - rad - by0) / pixel - 0.5)));
-    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.y[p] + rad - by0) / pixel - 0.5)));
-    const long i0 = static_cast<long>(std::ceil((P.x[p] - rad - bx0) / px - 0.5));
-    const long i1 = static_cast<long>(std::floor((P.x[p] + rad - bx0) / px - 0.5));
+    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.pos(1)[p] - rad - by0) / pixel - 0.5)));
+    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.pos(1)[p] + rad - by0) / pixel - 0.5)));
+    const long i0 = static_cast<long>(std::ceil((P.pos(0)[p] - rad - bx0) / px - 0.5));
+    const long i1 = static_cast<long>(std::floor((P.pos(0)[p] + rad - bx0) / px - 0.5));
     for (long j = j0; j <= j1; ++j)
       for (long i = i0; i <= i1; ++i) {
-        const double ex = bx0 + (i + 0.5) * px - P.x[p], ey = by0 + (j + 0.5) * pixel - P.y[p];
+        const double ex = bx0 + (i + 0.5) * px - P.pos(0)[p], ey = by0 + (j + 0.5) * pixel - P.pos(1)[p];
         if (ex * ex + ey * ey > r2) continue;
         long ii = i;
         if (R.wrap) ii = ((ii % nx) + nx) % nx;
@@ -231,8 +231,8 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
   double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300, smax = 0.0;
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
-    bx0 = std::min(bx0, P.x[p]); bx1 = std::max(bx1, P.x[p]);
-    by0 = std::min(by0, P.y[p]); by1 = std::max(by1, P.y[p]);
+    bx0 = std::min(bx0, P.pos(0)[p]); bx1 = std::max(bx1, P.pos(0)[p]);
+    by0 = std::min(by0, P.pos(1)[p]); by1 = std::max(by1, P.pos(1)[p]);
     smax = std::max(smax, std::sqrt(P.V[p]));
   }
   if (bx1 < bx0 || !(pixel > 0.0)) return area;

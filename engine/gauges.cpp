@@ -17,7 +17,7 @@ NearestPoint nearest_point(const Particles& P, double x, double y, const std::ve
   double best2 = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (std::size_t{P.body[i]} >= in_body.size() || !in_body[P.body[i]]) continue;
-    const double dx = P.x[i] - x, dy = P.y[i] - y, d2 = dx * dx + dy * dy;
+    const double dx = P.pos(0)[i] - x, dy = P.pos(1)[i] - y, d2 = dx * dx + dy * dy;
     if (d2 < best2) {  // strict: the lowest index among equally near points
       best2 = d2;
       best.index = i;
@@ -30,10 +30,10 @@ NearestPoint nearest_point(const Particles& P, double x, double y, const std::ve
 std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double spacing) {
   double top = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < P.size(); ++i)
-    if (P.body[i] == body) top = std::max(top, P.y[i]);
+    if (P.body[i] == body) top = std::max(top, P.pos(1)[i]);
   std::vector<std::uint32_t> ids;
   for (std::size_t i = 0; i < P.size(); ++i)
-    if (P.body[i] == body && P.y[i] > top - 0.5 * spacing) ids.push_back(static_cast<std::uint32_t>(i));
+    if (P.body[i] == body && P.pos(1)[i] > top - 0.5 * spacing) ids.push_back(static_cast<std::uint32_t>(i));
   return ids;
 }
 
@@ -92,7 +92,7 @@ std::vector<GaugeSample> PointRecorder::sample(const Simulation& sim) {
   for (const auto& g : gauges_) {
     const std::size_t i = where_[static_cast<std::size_t>(slot_[g.id])];
     const int k = sim.body_material()[P.body[i]];
-    out.push_back({P.x[i], P.y[i], P.vx[i], P.vy[i], P.sxx[i] - P.p[i], P.syy[i] - P.p[i], P.sxy[i], P.p[i],
+    out.push_back({P.pos(0)[i], P.pos(1)[i], P.vel(0)[i], P.vel(1)[i], P.dev(0)[i] - P.p[i], P.dev(1)[i] - P.p[i], P.dev(2)[i], P.p[i],
                    P.m[i] / P.V[i], particle_temperature(P, i, sim.thermo()[k], sim.materials()[k])});
   }
   return out;
@@ -104,7 +104,7 @@ std::vector<double> PointRecorder::surface_velocity(const Simulation& sim) {
   std::vector<double> u;
   for (const auto& s : surfaces_) {
     double sum = 0.0;
-    for (const std::uint32_t id : s.ids) sum += P.vy[where_[static_cast<std::size_t>(slot_[id])]];
+    for (const std::uint32_t id : s.ids) sum += P.vel(1)[where_[static_cast<std::size_t>(slot_[id])]];
     u.push_back(s.ids.empty() ? 0.0 : sum / double(s.ids.size()));
   }
   return u;

@@ -6,20 +6,8 @@
 
 namespace smpm {
 
-namespace {
-// Every double array in use: the optional ones only when allocated.
-template <class F>
-void for_each_double(Particles& P, F&& f) {
-  for (auto* v : {&P.x, &P.y, &P.vx, &P.vy, &P.m, &P.V, &P.sxx, &P.syy, &P.sxy, &P.p, &P.Lxx, &P.Lxy,
-                  &P.Lyx, &P.Lyy})
-    f(*v);
-  for (auto* v : {&P.Cxx, &P.Cxy, &P.Cyx, &P.Cyy, &P.e, &P.epsp, &P.q, &P.wp})
-    if (!v->empty()) f(*v);
-}
-}  // namespace
-
 void Particles::resize(std::size_t n) {
-  for_each_double(*this, [n](std::vector<double>& v) { v.resize(n, 0.0); });
+  for_each_double([n](const FieldName&, std::vector<double>& a) { a.resize(n, 0.0); });
   id.resize(n, 0);
   body.resize(n, 0);
   if (!field.empty()) field.resize(n, 0);
@@ -34,16 +22,30 @@ void Particles::enable(std::vector<double>& field, std::size_t n, bool on) {
 }
 
 void Particles::enable_affine(bool on) {
-  for (auto* v : {&Cxx, &Cxy, &Cyx, &Cyy}) {
-    if (on) v->assign(size(), 0.0);
-    else std::vector<double>().swap(*v);
+  for (auto& a : C) {
+    if (on) a.assign(size(), 0.0);
+    else std::vector<double>().swap(a);
   }
 }
 
 kern::ParticleView Particles::view() {
   auto d = [](std::vector<double>& v) { return v.empty() ? nullptr : v.data(); };
-  return {x.data(), y.data(), vx.data(), vy.data(), m.data(), V.data(), sxx.data(), syy.data(), sxy.data(),
-          p.data(), Lxx.data(), Lxy.data(), Lyx.data(), Lyy.data(), d(Cxx), d(Cxy), d(Cyx), d(Cyy), d(q), d(e)};
+  kern::ParticleView w{};
+  for (int a = 0; a < kern::kDim; ++a) {
+    w.x[a] = x[a].data();
+    w.v[a] = v[a].data();
+  }
+  w.m = m.data();
+  w.V = V.data();
+  for (int k = 0; k < kSym; ++k) w.s[k] = s[k].data();
+  w.p = p.data();
+  for (int k = 0; k < kern::kDim * kern::kDim; ++k) {
+    w.L[k] = L[k].data();
+    w.C[k] = d(C[k]);
+  }
+  w.q = d(q);
+  w.e = d(e);
+  return w;
 }
 
 void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std::vector<std::uint32_t>& su,
@@ -52,9 +54,9 @@ void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std
   sd.resize(n);
   su.resize(n);
   sb.resize(n);
-  for_each_double(*this, [&](std::vector<double>& v) {
-    kern::gather_permute(v.data(), order, n, sd.data());
-    v.swap(sd);
+  for_each_double([&](const FieldName&, std::vector<double>& a) {
+    kern::gather_permute(a.data(), order, n, sd.data());
+    a.swap(sd);
   });
   kern::gather_permute(id.data(), order, n, su.data());
   id.swap(su);
@@ -68,7 +70,8 @@ void Particles::permute(const std::uint32_t* order, std::vector<double>& sd, std
 
 std::size_t Particles::bytes() const {
   std::size_t b = 0;
-  for_each_double(const_cast<Particles&>(*this), [&](std::vector<double>& v) { b += v.capacity() * sizeof(double); });
+  const_cast<Particles&>(*this).for_each_double(
+      [&](const FieldName&, std::vector<double>& a) { b += a.capacity() * sizeof(double); });
   return b + id.capacity() * sizeof(std::uint32_t) + body.capacity() + field.capacity();
 }
 
@@ -80,10 +83,15 @@ std::vector<std::string> Particles::fields_in_use() const {
 
 void Particles::append(const Particles& o) {
   auto cat = [](auto& a, const auto& b) { a.insert(a.end(), b.begin(), b.end()); };
-  cat(x, o.x); cat(y, o.y); cat(vx, o.vx); cat(vy, o.vy); cat(m, o.m); cat(V, o.V);
-  cat(sxx, o.sxx); cat(syy, o.syy); cat(sxy, o.sxy); cat(p, o.p);
-  cat(Lxx, o.Lxx); cat(Lxy, o.Lxy); cat(Lyx, o.Lyx); cat(Lyy, o.Lyy);
-  cat(Cxx, o.Cxx); cat(Cxy, o.Cxy); cat(Cyx, o.Cyx); cat(Cyy, o.Cyy);
+  for (int d = 0; d < kern::kDim; ++d) {
+    cat(x[d], o.x[d]);
+    cat(v[d], o.v[d]);
+  }
+  cat(m, o.m); cat(V, o.V);
+  for (int k = 0; k < kSym; ++k) cat(s[k], o.s[k]);
+  cat(p, o.p);
+  for (int k = 0; k < kern::kDim * kern::kDim; ++k) cat(L[k], o.L[k]);
+  for (int k = 0; k < kern::kDim * kern::kDim; ++k) cat(C[k], o.C[k]);
   cat(e, o.e); cat(epsp, o.epsp); cat(q, o.q); cat(wp, o.wp);
   cat(id, o.id); cat(body, o.body);
   if (!field.empty() || !o.field.empty()) {  // a side without fields is all field 0

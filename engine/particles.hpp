@@ -5,23 +5,40 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kernels/views.hpp"
 
 namespace smpm {
 
+inline constexpr int kSym = kern::sym_size(kern::kDim);  // symmetric tensor components
+
+// The name of one particle array: a stem and up to two axis indices ("x", "vy", "sxy", "Lyx").
+struct FieldName {
+  const char* stem;
+  int r = -1, c = -1;
+  std::string str() const {
+    std::string n = stem;
+    for (const int a : {r, c})
+      if (a >= 0) n += kern::kAxisNames[a];
+    return n;
+  }
+};
+
 struct Particles {
-  // Always present.
-  std::vector<double> x, y;       // position [m]
-  std::vector<double> vx, vy;     // velocity [m/s]
+  // Always present. Vector and tensor fields are one array per component: x[d], v[d] by axis;
+  // s[k] by symmetric component (kernels/tensor.hpp's order: xx, yy, xy at D = 2); L and C row
+  // major, L[r * kern::kDim + c].
+  std::vector<double> x[kern::kDim];    // position [m]
+  std::vector<double> v[kern::kDim];    // velocity [m/s]
   std::vector<double> m;          // mass per unit thickness [kg/m]
   std::vector<double> V;          // current volume per unit thickness [m^2]
-  std::vector<double> sxx, syy, sxy;  // stress deviator [Pa] (s_zz = -(s_xx + s_yy))
+  std::vector<double> s[kSym];    // stress deviator [Pa] (at D = 2, s_zz = -(s_xx + s_yy))
   std::vector<double> p;          // pressure [Pa], compression positive
-  std::vector<double> Lxx, Lxy, Lyx, Lyy;  // velocity gradient [1/s]
+  std::vector<double> L[kern::kDim * kern::kDim];  // velocity gradient [1/s]
   // Optional: sized 0 unless the scene needs them.
-  std::vector<double> Cxx, Cxy, Cyx, Cyy;  // APIC affine matrix [1/s]
+  std::vector<double> C[kern::kDim * kern::kDim];  // APIC affine matrix [1/s]
   std::vector<double> e;      // specific internal energy [J/kg] (energy-dependent EOS)
   std::vector<double> epsp;   // equivalent plastic strain [-] (plastic strength)
   std::vector<double> q;      // artificial viscous pressure [Pa] (artificial viscosity on)
@@ -32,18 +49,18 @@ struct Particles {
   // separated void faces: the side of its nearest void, assign_void_sides); else empty.
   std::vector<std::uint8_t> field;
 
-  std::size_t size() const { return x.size(); }
-  // Component arrays by axis: position and velocity (axis d), stress deviator (symmetric
-  // component k, kernels/tensor.hpp's order), velocity gradient and affine matrix (row r,
-  // column c).
-  std::vector<double>& pos(int d) { return d == 0 ? x : y; }
-  const std::vector<double>& pos(int d) const { return d == 0 ? x : y; }
-  std::vector<double>& vel(int d) { return d == 0 ? vx : vy; }
-  const std::vector<double>& vel(int d) const { return d == 0 ? vx : vy; }
-  std::vector<double>& dev(int k) { return k == 0 ? sxx : k == 1 ? syy : sxy; }
-  const std::vector<double>& dev(int k) const { return k == 0 ? sxx : k == 1 ? syy : sxy; }
-  std::vector<double>& grad(int r, int c) { return r == 0 ? (c == 0 ? Lxx : Lxy) : (c == 0 ? Lyx : Lyy); }
-  std::vector<double>& affine(int r, int c) { return r == 0 ? (c == 0 ? Cxx : Cxy) : (c == 0 ? Cyx : Cyy); }
+  std::size_t size() const { return x[0].size(); }
+  // Component arrays by axis d, symmetric component k, row r and column c.
+  std::vector<double>& pos(int d) { return x[d]; }
+  const std::vector<double>& pos(int d) const { return x[d]; }
+  std::vector<double>& vel(int d) { return v[d]; }
+  const std::vector<double>& vel(int d) const { return v[d]; }
+  std::vector<double>& dev(int k) { return s[k]; }
+  const std::vector<double>& dev(int k) const { return s[k]; }
+  std::vector<double>& grad(int r, int c) { return L[r * kern::kDim + c]; }
+  const std::vector<double>& grad(int r, int c) const { return L[r * kern::kDim + c]; }
+  std::vector<double>& affine(int r, int c) { return C[r * kern::kDim + c]; }
+  const std::vector<double>& affine(int r, int c) const { return C[r * kern::kDim + c]; }
   void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)
   void enable_affine(bool on);  // allocate (zeroed) or release the APIC matrix
   // allocate (zeroed) or release one optional scalar field
@@ -57,18 +74,31 @@ struct Particles {
   std::size_t bytes() const;
   // Names of the arrays in use (the optional ones only when allocated), as in this struct.
   std::vector<std::string> fields_in_use() const;
-  // f(name, array) for every array in use, in the order of fields_in_use (checkpoints).
+  // f(name, array) for every array in use, in the order of fields_in_use (checkpoints): x, y,
+  // vx, vy, m, V, sxx, syy, sxy, p, Lxx, Lxy, Lyx, Lyy, then the optional Cxx .. Cyy, e, epsp, q,
+  // wp when allocated, then id, body and (when used) field.
   template <class F>
   void each_array(F&& f) {
-    const char* names[] = {"x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "Lxx", "Lxy", "Lyx", "Lyy",
-                           "Cxx", "Cxy", "Cyx", "Cyy", "e", "epsp", "q", "wp"};
-    std::vector<double>* arrays[] = {&x, &y, &vx, &vy, &m, &V, &sxx, &syy, &sxy, &p, &Lxx, &Lxy, &Lyx, &Lyy,
-                                     &Cxx, &Cxy, &Cyx, &Cyy, &e, &epsp, &q, &wp};
-    for (int k = 0; k < 22; ++k)
-      if (k < 14 || !arrays[k]->empty()) f(names[k], *arrays[k]);
+    for_each_double([&](const FieldName& n, std::vector<double>& a) { f(n.str().c_str(), a); });
     f("id", id);
     f("body", body);
     if (!field.empty()) f("field", field);
+  }
+  // f(name, array) for every double array in use (the optional ones only when allocated).
+  template <class F>
+  void for_each_double(F&& f) {
+    constexpr int D = kern::kDim;
+    for (int d = 0; d < D; ++d) f(FieldName{"", d}, x[d]);
+    for (int d = 0; d < D; ++d) f(FieldName{"v", d}, v[d]);
+    f(FieldName{"m"}, m);
+    f(FieldName{"V"}, V);
+    for (int k = 0; k < kSym; ++k) f(FieldName{"s", kern::sym_row(D, k), kern::sym_col(D, k)}, s[k]);
+    f(FieldName{"p"}, p);
+    for (int k = 0; k < D * D; ++k) f(FieldName{"L", k / D, k % D}, L[k]);
+    for (int k = 0; k < D * D; ++k)
+      if (!C[k].empty()) f(FieldName{"C", k / D, k % D}, C[k]);
+    for (auto [stem, a] : {std::pair{"e", &e}, {"epsp", &epsp}, {"q", &q}, {"wp", &wp}})
+      if (!a->empty()) f(FieldName{stem}, *a);
   }
   void append(const Particles& o);
 };

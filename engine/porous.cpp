@@ -26,8 +26,8 @@ SiteIndex index_sites(const Particles& P, double d, double ox, double oy, double
   S.nb = static_cast<long>(std::ceil((y1 - oy) / d)) - S.b0 + 1;
   S.site.assign(static_cast<std::size_t>(S.na * S.nb), -1);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const long a = static_cast<long>(std::floor((P.x[i] - ox) / d)) - S.a0;
-    const long b = static_cast<long>(std::floor((P.y[i] - oy) / d)) - S.b0;
+    const long a = static_cast<long>(std::floor((P.pos(0)[i] - ox) / d)) - S.a0;
+    const long b = static_cast<long>(std::floor((P.pos(1)[i] - oy) / d)) - S.b0;
     if (a < 0 || a >= S.na || b < 0 || b >= S.nb) throw std::logic_error("cut_voids: point outside the body rectangle");
     S.site[static_cast<std::size_t>(b * S.na + a)] = static_cast<std::int64_t>(i);
   }
@@ -82,7 +82,7 @@ Particles keep_unremoved(const Particles& P, const Removal& R) {
   std::size_t k = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (R.removed[i]) continue;
-    Q.x[k] = P.x[i]; Q.y[k] = P.y[i]; Q.vx[k] = P.vx[i]; Q.vy[k] = P.vy[i];
+    Q.pos(0)[k] = P.pos(0)[i]; Q.pos(1)[k] = P.pos(1)[i]; Q.vel(0)[k] = P.vel(0)[i]; Q.vel(1)[k] = P.vel(1)[i];
     Q.m[k] = P.m[i]; Q.V[k] = P.V[i]; Q.body[k] = P.body[i];
     ++k;
   }
@@ -131,8 +131,8 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
 Particles mirror_y(const Particles& P, double y_plane) {
   Particles Q = P;
   for (std::size_t i = 0; i < Q.size(); ++i) {
-    Q.y[i] = 2.0 * y_plane - P.y[i];
-    Q.vy[i] = -P.vy[i];
+    Q.pos(1)[i] = 2.0 * y_plane - P.pos(1)[i];
+    Q.vel(1)[i] = -P.vel(1)[i];
   }
   return Q;
 }
@@ -174,7 +174,7 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, 
   }
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) {
-    const double x = P.x[p], y = P.y[p];
+    const double x = P.pos(0)[p], y = P.pos(1)[p];
     const long by = static_cast<long>(std::floor((y - ymin) / B)), bx = column(x);
     double best = reach;
     double side = 0.0, lat = 0.0;  // (x - c) . s and (x - c) x s of the nearest void

@@ -207,27 +207,30 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
   const Particles& P = sim.particles();
   const std::size_t n = P.size();
   std::vector<SnapshotField> f;
-  auto vec = [&](const char* name, const char* units, const std::vector<double>& a, const std::vector<double>& b) {
-    SnapshotField s{name, units, 2, std::vector<double>(2 * n)};
-    for (std::size_t i = 0; i < n; ++i) {
-      s.data[2 * i] = a[i];
-      s.data[2 * i + 1] = b[i];
-    }
+  auto vec = [&](const char* name, const char* units, const std::vector<double>(&a)[kern::kDim]) {
+    SnapshotField s{name, units, kern::kDim, std::vector<double>(kern::kDim * n)};
+    for (std::size_t i = 0; i < n; ++i)
+      for (int d = 0; d < kern::kDim; ++d) s.data[kern::kDim * i + d] = a[d][i];
     f.push_back(std::move(s));
   };
-  auto scal = [&](const char* name, const char* units, auto get) {
+  auto scal = [&](const std::string& name, const char* units, auto get) {
     SnapshotField s{name, units, 1, std::vector<double>(n)};
     for (std::size_t i = 0; i < n; ++i) s.data[i] = get(i);
     f.push_back(std::move(s));
   };
-  vec("position", "m", P.x, P.y);
-  vec("velocity", "m/s", P.vx, P.vy);
+  vec("position", "m", P.x);
+  vec("velocity", "m/s", P.v);
   scal("pressure", "Pa", [&](std::size_t i) { return P.p[i]; });
   scal("density", "kg/m^3", [&](std::size_t i) { return P.m[i] / P.V[i]; });
-  scal("stress_xx", "Pa", [&](std::size_t i) { return P.sxx[i] - P.p[i]; });
-  scal("stress_yy", "Pa", [&](std::size_t i) { return P.syy[i] - P.p[i]; });
-  scal("stress_xy", "Pa", [&](std::size_t i) { return P.sxy[i]; });
-  scal("stress_zz", "Pa", [&](std::size_t i) { return -(P.sxx[i] + P.syy[i]) - P.p[i]; });
+  // total stress s - p I by symmetric component; at D = 2 also the out-of-plane s_zz - p
+  for (int k = 0; k < kSym; ++k) {
+    const int r = kern::sym_row(kern::kDim, k), c = kern::sym_col(kern::kDim, k);
+    const std::string name = std::string("stress_") + kern::kAxisNames[r] + kern::kAxisNames[c];
+    if (r == c) scal(name, "Pa", [&, k](std::size_t i) { return P.s[k][i] - P.p[i]; });
+    else scal(name, "Pa", [&, k](std::size_t i) { return P.s[k][i]; });
+  }
+  if constexpr (kern::kDim == 2)
+    scal("stress_zz", "Pa", [&](std::size_t i) { return -(P.s[0][i] + P.s[1][i]) - P.p[i]; });
   if (!P.e.empty()) {
     scal("energy", "J/kg", [&](std::size_t i) { return P.e[i]; });
     scal("temperature", "K", [&](std::size_t i) {
@@ -343,10 +346,10 @@ void describe_points(std::ostream& o, const Scene& sc) {
   if (sc.gauges.size() <= 20)
     for (const auto& g : sc.gauges)
       o << "  gauge " << std::left << std::setw(10) << g.name << std::right << " point " << g.id << " of body "
-        << sc.bodies[P.body[g.id]].name << " at (" << P.x[g.id] * 1e6 << ", " << P.y[g.id] * 1e6 << ") um\n";
+        << sc.bodies[P.body[g.id]].name << " at (" << P.x[0][g.id] * 1e6 << ", " << P.x[1][g.id] * 1e6 << ") um\n";
   for (const auto& f : sc.free_surfaces)
     o << "free surface    body " << f.body_name << ": the " << f.ids.size() << " points of its top row at y = "
-      << P.y[f.ids.front()] * 1e6 << " um (freesurface.csv)\n";
+      << P.x[1][f.ids.front()] * 1e6 << " um (freesurface.csv)\n";
 }
 
 }  // namespace
@@ -601,7 +604,7 @@ void RunOutputs::write_series_h5() {
 void RunOutputs::write_wall() {
   if (!wall_.is_open()) return;
   Timed t(s_.diagnostics_seconds);
-  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().bottom, scene_.geom.length(0)});
+  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().lo[1], scene_.geom.length(0)});
   wall_.flush();
 }
 

@@ -138,10 +138,10 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double 
         const double x = g.lo[0] + (a + 0.5) * d;
         if (!inside(Point{x, y})) continue;
         if (pass == 1) {
-          P.x[k] = x;
-          P.y[k] = y;
-          P.vx[k] = vx;
-          P.vy[k] = vy;
+          P.pos(0)[k] = x;
+          P.pos(1)[k] = y;
+          P.vel(0)[k] = vx;
+          P.vel(1)[k] = vy;
           P.V[k] = d * d;
           P.m[k] = rho0 * d * d;
           P.body[k] = body;
@@ -524,12 +524,12 @@ Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8
   S.resize(sb.particles);
   for (std::size_t i = 0; i < sb.particles; ++i) {
     const std::size_t j = first + i;
-    S.x[i] = s.particles.x[j]; S.y[i] = s.particles.y[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
+    S.pos(0)[i] = s.particles.pos(0)[j]; S.pos(1)[i] = s.particles.pos(1)[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
   }
   Particles P = mirror_y(S, plane);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    P.vx[i] = vx;
-    P.vy[i] = vy;
+    P.vel(0)[i] = vx;
+    P.vel(1)[i] = vy;
     P.body[i] = b;
   }
   box = {{sb.x0, 2 * plane - sb.y1}, {sb.x1, 2 * plane - sb.y0}};
@@ -621,11 +621,11 @@ void check_in_grid(const CaseReader& r, const Scene& s, const BodyInfo& info, co
 void claim_sites(const std::vector<CaseReader>& bodies, std::size_t b, const Scene& s, BodyLattice& L, const Particles& P) {
   const double d = s.geom.h / L.ppc;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const long long a = std::llround((P.x[i] - s.geom.lo[0]) / d - 0.5), c = std::llround((P.y[i] - s.geom.lo[1]) / d - 0.5);
+    const long long a = std::llround((P.pos(0)[i] - s.geom.lo[0]) / d - 0.5), c = std::llround((P.pos(1)[i] - s.geom.lo[1]) / d - 0.5);
     auto [pos, fresh] = L.taken.emplace(c * (1LL << 32) + a, b);
     if (!fresh)
       throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + bodies[b].path() + "' overlap near (" +
-                      std::to_string(P.x[i]) + ", " + std::to_string(P.y[i]) + ") m");
+                      std::to_string(P.pos(0)[i]) + ", " + std::to_string(P.pos(1)[i]) + ") m");
   }
 }
 
@@ -760,16 +760,16 @@ void add_free_surfaces(Scene& s, double d) {
     FreeSurface f{s.bodies[b].name, top_row(P, static_cast<std::uint8_t>(b), d)};
     double top = -kInf, x0 = kInf, x1 = -kInf;
     for (const std::uint32_t i : f.ids) {
-      top = std::max(top, P.y[i]);
-      x0 = std::min(x0, P.x[i]);
-      x1 = std::max(x1, P.x[i]);
+      top = std::max(top, P.pos(1)[i]);
+      x0 = std::min(x0, P.pos(0)[i]);
+      x1 = std::max(x1, P.pos(0)[i]);
     }
     const std::string key = "case key 'bodies[" + std::to_string(b) + "].record_free_surface' = true (body '" +
                             s.bodies[b].name + "'): its top surface at y = " +
                             format_number(std::round((top + 0.5 * d) * 1e12) * 1e-6 + 0.0) +  // [um], round-off cut
                             " um is not free: ";
     for (std::size_t i = 0; i < P.size(); ++i)
-      if (P.body[i] != static_cast<std::uint8_t>(b) && P.y[i] > top && P.y[i] < top + 1.5 * d && P.x[i] > x0 - d && P.x[i] < x1 + d)
+      if (P.body[i] != static_cast<std::uint8_t>(b) && P.pos(1)[i] > top && P.pos(1)[i] < top + 1.5 * d && P.pos(0)[i] > x0 - d && P.pos(0)[i] < x1 + d)
         throw CaseError(key + "body '" + s.bodies[P.body[i]].name + "' lies on it; allowed on a body whose top "
                         "(max y) surface nothing touches");
     if (s.solver.walls.hi[1] != kern::Wall::None && top + 1.5 * d > grid_top)

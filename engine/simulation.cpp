@@ -222,16 +222,18 @@ void Simulation::close_cracks() {
   for (std::size_t k = 0; k < materials_.size(); ++k) {
     const Material& mat = materials_[k];
     if (!(mat.spall_strength > 0.0)) continue;
-    const kern::CrackArrays A{P_.m.data(), P_.V.data(), P_.p.data(), P_.sxx.data(), P_.syy.data(), P_.sxy.data(),
-                              opt(P_.q), opt(P_.e), P_.vx.data(), P_.vy.data(), P_.body.data(),
-                              P_.field.empty() ? nullptr : P_.field.data(),
-                              materials_.size() > 1 ? select_[k].data() : nullptr};
+    const kern::ParticleView pv = P_.view();
+    kern::CrackArrays A{P_.m.data(), P_.V.data(), P_.p.data(), {}, opt(P_.q), opt(P_.e), {}, P_.body.data(),
+                        P_.field.empty() ? nullptr : P_.field.data(),
+                        materials_.size() > 1 ? select_[k].data() : nullptr};
+    std::copy(std::begin(pv.s), std::end(pv.s), A.s);
+    std::copy(std::begin(pv.v), std::end(pv.v), A.v);
     const auto [p_min, rho_min] = fracture_limits(mat);
     const kern::CrackParams prm{p_min, rho_min};
     with_material(mat, [&](const auto& eos, const auto& str) {
       const auto r = kern::close_cracks(A, order_.data(), cell_start_.data(), grid_.geom.num_keys(), prm, eos,
-                                        [&](double rho, double P, double vx, double vy) {
-                                          return kern::signal_speed(eos, str, rho, P, vx, vy);
+                                        [&](double rho, double P, std::uint32_t i) {
+                                          return kern::signal_speed(eos, str, rho, P, pv.v[0][i], pv.v[1][i]);
                                         });
       max_speed_ = std::max(max_speed_, r.max_speed);
     });
@@ -316,10 +318,10 @@ void Simulation::update_grid() {
     kern::grid_update(g, box_, G.field(f), q, row_force_.data());
     for (int r = 0; r < g.num_lines(); ++r) {
       const double* rf = &row_force_[kern::kRowSlots * r];
-      w.left += rf[0];
-      w.right += rf[1];
-      w.bottom += rf[2];
-      w.top += rf[3];
+      for (int d = 0; d < kern::kDim; ++d) {
+        w.lo[d] += rf[2 * d];
+        w.hi[d] += rf[2 * d + 1];
+      }
       removed_.wall += rf[2 * kern::kDim];
     }
   }
@@ -471,14 +473,19 @@ std::string Simulation::describe_particle(std::size_t p) const {
   std::ostringstream s;
   s.precision(9);
   s << "particle " << P_.id[p] << " (body " << int(P_.body[p]) << ") at step " << steps_ << ", t = " << time_
-    << " s, position (" << P_.x[p] << ", " << P_.y[p] << ") m, velocity (" << P_.vx[p] << ", " << P_.vy[p]
-    << ") m/s, volume " << P_.V[p] << " m^2";
+    << " s";
+  for (const auto& [what, a, unit] : {std::tuple{"position", &P_.x, "m"}, {"velocity", &P_.v, "m/s"}}) {
+    s << ", " << what << " (";
+    for (int d = 0; d < kern::kDim; ++d) s << (d ? ", " : "") << (*a)[d][p];
+    s << ") " << unit;
+  }
+  s << ", volume " << P_.V[p] << " m^2";
   return s.str();
 }
 
 Simulation::Energy Simulation::energy() const {
   Energy e;
-  const bool has_e = !P_.e.empty(), apic = !P_.Cxx.empty();
+  const bool has_e = !P_.e.empty(), apic = !P_.C[0].empty();
   const auto& g = grid_.geom;
   const auto pv = const_cast<Particles&>(P_).view();
   for (std::size_t p = 0; p < P_.size(); ++p) {
@@ -488,9 +495,9 @@ Simulation::Energy Simulation::energy() const {
     if (apic) {  // the affine field's share: 1/2 m sum_ab C_ab^2 D_b
       double Dn[kern::kDim], C[kern::kDim][kern::kDim];
       kern::with_shape(cfg_.shape, [&](auto shape) {
-        kern::Vec<kern::kDim> xg;
-        for (int d = 0; d < kern::kDim; ++d) xg[d] = (pv.pos(d)[p] - g.origin(d)) / g.h;
-        const kern::Stencil<decltype(shape), kern::kDim> st(xg, cfg_.ugimp_lp);
+        kern::Vec<kern::kDim> u;
+        for (int d = 0; d < kern::kDim; ++d) u[d] = (pv.pos(d)[p] - g.origin(d)) / g.h;
+        const kern::Stencil<decltype(shape), kern::kDim> st(u, cfg_.ugimp_lp);
         for (int d = 0; d < kern::kDim; ++d) Dn[d] = st.inertia(d);
       });
       for (int r = 0; r < kern::kDim; ++r)
@@ -501,10 +508,29 @@ Simulation::Energy Simulation::energy() const {
       e.internal += P_.m[p] * P_.e[p];
     } else {
       const Material& mat = materials_[body_material_[P_.body[p]]];
-      e.internal += P_.V[p] * mat.strain_energy_density(P_.sxx[p], P_.syy[p], P_.sxy[p], P_.p[p]);
+      e.internal += P_.V[p] * mat.strain_energy_density(P_.s[0][p], P_.s[1][p], P_.s[2][p], P_.p[p]);
     }
   }
   return e;
+}
+
+std::vector<Simulation::Scalar> Simulation::checkpoint_scalars() {
+  std::vector<Scalar> s{{"time [s]", &time_},
+                        {"dt [s]", &dt_},
+                        {"last_dt [s]", &last_dt_},
+                        {"max_speed [m/s]", &max_speed_},
+                        {"box_nodes [1]", &box_nodes_},
+                        {"removed_wall [J/m]", &removed_.wall},
+                        {"removed_contact [J/m]", &removed_.contact}};
+  for (int d = 0; d < kern::kDim; ++d) {  // wall reactions, low then high face, axis by axis
+    s.push_back({std::string("wall_lo_") + kern::kAxisNames[d] + " [N/m]", &wall_.lo[d]});
+    s.push_back({std::string("wall_hi_") + kern::kAxisNames[d] + " [N/m]", &wall_.hi[d]});
+  }
+  for (auto [name, t] : {std::pair{"sort", &times_.sort}, {"p2g", &times_.p2g}, {"grid", &times_.grid},
+                         {"contact", &times_.contact}, {"g2p", &times_.g2p}, {"constitutive", &times_.constitutive},
+                         {"heat", &times_.heat}})
+    s.push_back({std::string("time_") + name + " [s of wall time]", t});
+  return s;
 }
 
 void Simulation::save(CheckpointWriter& w) const {
@@ -515,8 +541,13 @@ void Simulation::save(CheckpointWriter& w) const {
   w.put("sim/steps", std::int64_t{steps_});
   w.put("sim/gradient_step", std::int64_t{gradient_step_});
   std::vector<double> scalars;
-  for (const double* x : checkpoint_scalars(*this)) scalars.push_back(*x);
+  std::string names;
+  for (const Scalar& s : const_cast<Simulation&>(*this).checkpoint_scalars()) {
+    scalars.push_back(*s.value);
+    names += s.name + ";";
+  }
   w.put("sim/scalars", scalars);
+  w.put("sim/scalar_names", names);
 }
 
 void Simulation::restore(const CheckpointReader& r) {
@@ -536,11 +567,17 @@ void Simulation::restore(const CheckpointReader& r) {
   gradient_step_ = r.integer("sim/gradient_step");
   std::vector<double> v;
   r.get("sim/scalars", v);
-  const auto slots = checkpoint_scalars(*this);
+  const auto slots = checkpoint_scalars();
+  std::string names;
+  for (const Scalar& s : slots) names += s.name + ";";
+  // a checkpoint without the names record holds the same list by position
+  if (r.has("sim/scalar_names") && r.text("sim/scalar_names") != names)
+    throw CheckpointError("checkpoint " + r.file().string() + " holds the scalars '" + r.text("sim/scalar_names") +
+                          "', this build keeps '" + names + "': not a checkpoint of this build");
   if (v.size() != slots.size())
     throw CheckpointError("checkpoint " + r.file().string() + ": sim/scalars has " + std::to_string(v.size()) +
                           " values, expected " + std::to_string(slots.size()));
-  for (std::size_t k = 0; k < slots.size(); ++k) *slots[k] = v[k];
+  for (std::size_t k = 0; k < slots.size(); ++k) *slots[k].value = v[k];
 }
 
 std::array<double, kern::kDim> Simulation::momentum() const {

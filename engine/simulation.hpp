@@ -31,9 +31,10 @@ struct StepError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// Wall reaction on the material [N per metre of thickness], normal component.
+// Wall reaction on the material [N per metre of thickness], normal component, on the low and
+// the high face of each axis.
 struct WallForces {
-  double left = 0, right = 0, bottom = 0, top = 0;
+  double lo[kern::kDim] = {}, hi[kern::kDim] = {};
 };
 
 // Wall-clock seconds spent in each phase, summed over steps. `grid` excludes `contact`.
@@ -181,15 +182,14 @@ class Simulation {
   WallForces wall_;
   PhaseTimes times_;
 
-  // The scalars a checkpoint keeps, in the order of its record "sim/scalars": save() and
-  // restore() both read this one list (double* for a Simulation, const double* for a const one).
-  template <class Self>
-  static auto checkpoint_scalars(Self& s) {
-    return std::array{&s.time_,       &s.dt_,          &s.last_dt_,     &s.max_speed_,   &s.box_nodes_,
-                      &s.removed_.wall, &s.removed_.contact, &s.wall_.left, &s.wall_.right, &s.wall_.bottom,
-                      &s.wall_.top,   &s.times_.sort,  &s.times_.p2g,   &s.times_.grid,  &s.times_.contact,
-                      &s.times_.g2p,  &s.times_.constitutive, &s.times_.heat};
-  }
+  // One scalar a checkpoint keeps: its name with its unit, and where it lives.
+  struct Scalar {
+    std::string name;  // "name [unit]"
+    double* value;
+  };
+  // The scalars a checkpoint keeps, in the order of its records "sim/scalars" (the values) and
+  // "sim/scalar_names" (their names): save() and restore() both read this one list.
+  std::vector<Scalar> checkpoint_scalars();
 };
 
 }  // namespace smpm

@@ -207,7 +207,7 @@ struct ConstitutiveResult {
 // begins: bitwise the same for any thread count and block split (tests/test_contact.cpp and
 // tests/test_elastic.cpp, "determinism").
 //
-// Points [first, last) on the calling thread; L.xx[i] ... is the gradient of point first + i.
+// Points [first, last) on the calling thread; L.at(0, 0)[i] ... is the gradient of point first + i.
 template <bool Selective, bool HasE, bool HasQ, bool HasWp, bool Midstep, class Eos, class Strength>
 ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
                                       std::size_t first, std::size_t last, const ConstitutiveParams& q,
@@ -221,21 +221,21 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
   // every array through a local restrict pointer to the range's first point: the view's
   // members might alias the stores, so the compiler would reload them for every point
-  const double* __restrict Lxxp = L.xx;
-  const double* __restrict Lxyp = L.xy;
-  const double* __restrict Lyxp = L.yx;
-  const double* __restrict Lyyp = L.yy;
+  const double* __restrict Lxxp = L.at(0, 0);
+  const double* __restrict Lxyp = L.at(0, 1);
+  const double* __restrict Lyxp = L.at(1, 0);
+  const double* __restrict Lyyp = L.at(1, 1);
   // the mid-step rate of the energy's work (Midstep; kern::g2p_blocks' heating pass writes it)
-  const double* __restrict Wxxp = Midstep ? L.wxx : nullptr;
-  const double* __restrict Wyyp = Midstep ? L.wyy : nullptr;
-  const double* __restrict Wxyp = Midstep ? L.wxy : nullptr;
+  const double* __restrict Wxxp = Midstep ? L.work(0) : nullptr;
+  const double* __restrict Wyyp = Midstep ? L.work(1) : nullptr;
+  const double* __restrict Wxyp = Midstep ? L.work(2) : nullptr;
   const double* __restrict mp = P.m + first;
-  const double* __restrict vxp = P.vx + first;
-  const double* __restrict vyp = P.vy + first;
+  const double* __restrict vxp = P.vel(0) + first;
+  const double* __restrict vyp = P.vel(1) + first;
   double* __restrict Vp = P.V + first;
-  double* __restrict sxxp = P.sxx + first;
-  double* __restrict syyp = P.syy + first;
-  double* __restrict sxyp = P.sxy + first;
+  double* __restrict sxxp = P.dev(0) + first;
+  double* __restrict syyp = P.dev(1) + first;
+  double* __restrict sxyp = P.dev(2) + first;
   double* __restrict pp = P.p + first;
   double* __restrict ep = HasE ? S.e + first : nullptr;
   double* __restrict qp = HasQ ? S.q + first : nullptr;
@@ -354,7 +354,7 @@ ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveS
     auto mid = [&](auto W) {
       constexpr bool w_ = decltype(W)::value;
       if constexpr (e_) {
-        // q.midstep reads L.wxx, wyy, wxy: only kern::g2p_blocks' heating USL pass writes them
+        // q.midstep reads L.work(0), wyy, wxy: only kern::g2p_blocks' heating USL pass writes them
         if (q.midstep) return constitutive_range<s_, e_, q_, w_, true>(P, S, L, first, last, q, eos, str, sel);
       }
       return constitutive_range<s_, e_, q_, w_, false>(P, S, L, first, last, q, eos, str, sel);
@@ -397,7 +397,7 @@ double max_signal_speed(const ParticleView& P, std::size_t n, const Eos& eos, co
 #pragma omp parallel for schedule(static) reduction(max : vmax)
   for (std::size_t p = 0; p < n; ++p) {
     if (!sel(p)) continue;
-    vmax = std::max(vmax, signal_speed(eos, str, P.m[p] / P.V[p], P.p[p], P.vx[p], P.vy[p]));
+    vmax = std::max(vmax, signal_speed(eos, str, P.m[p] / P.V[p], P.p[p], P.vel(0)[p], P.vel(1)[p]));
   }
   return vmax;
 }

@@ -159,18 +159,21 @@ inline NodeBox real_nodes(const GridGeom& g, const NodeBox& b) {
   return r;
 }
 
-// Particle fields the transfer kernels read or write. Plane strain: stress is the deviator
-// (sxx, syy, sxy; szz = -(sxx + syy)) and the pressure p; total stress = s - p I.
+// Particle fields the transfer kernels read or write, one array per component: position and
+// velocity by axis, the stress deviator by symmetric component (kernels/tensor.hpp's order; at
+// D = 2, s_zz = -(s_xx + s_yy)), L and C row major. Total stress = s - p I.
 struct ParticleView {
-  double* x; double* y;
-  double* vx; double* vy;
+  static constexpr int K = sym_size(kDim);
+  double* x[kDim];
+  double* v[kDim];
   const double* m;
   double* V;            // current volume [m^2 per unit thickness]
-  double* sxx; double* syy; double* sxy; double* p;
+  double* s[K];         // stress deviator [Pa]
+  double* p;            // pressure [Pa]
   // Velocity gradient L = sum_i v_i grad w_ip^T, set by G2P, read by the constitutive update.
-  double* Lxx; double* Lxy; double* Lyx; double* Lyy;
+  double* L[kDim * kDim];
   // APIC affine matrix C = B D^-1 (null unless the transfer is APIC).
-  double* Cxx; double* Cxy; double* Cyx; double* Cyy;
+  double* C[kDim * kDim];
   // Artificial viscous pressure, added to p in the internal force (null: no viscosity).
   const double* q;
   // Specific internal energy (null when not tracked), heated by the APIC transfer dissipation.
@@ -178,14 +181,13 @@ struct ParticleView {
   // Several velocity fields (two-body contact, separated void faces): the field of each
   // particle, Particles::field (null: one field).
   const std::uint8_t* field_of = nullptr;
-  std::size_t field(std::size_t p) const { return field_of ? field_of[p] : 0; }
-  // Component arrays by axis: position and velocity (d), velocity gradient and affine matrix
-  // (row r, column c), stress deviator (symmetric component k, kernels/tensor.hpp's order).
-  SMPM_INLINE double* pos(int d) const { return d == 0 ? x : y; }
-  SMPM_INLINE double* vel(int d) const { return d == 0 ? vx : vy; }
-  SMPM_INLINE double* grad(int r, int c) const { return r == 0 ? (c == 0 ? Lxx : Lxy) : (c == 0 ? Lyx : Lyy); }
-  SMPM_INLINE double* affine(int r, int c) const { return r == 0 ? (c == 0 ? Cxx : Cxy) : (c == 0 ? Cyx : Cyy); }
-  SMPM_INLINE double* dev(int k) const { return k == 0 ? sxx : k == 1 ? syy : sxy; }
+  std::size_t field(std::size_t i) const { return field_of ? field_of[i] : 0; }
+  // Component arrays by axis d, symmetric component k, row r and column c.
+  SMPM_INLINE double* pos(int d) const { return x[d]; }
+  SMPM_INLINE double* vel(int d) const { return v[d]; }
+  SMPM_INLINE double* grad(int r, int c) const { return L[r * kDim + c]; }
+  SMPM_INLINE double* affine(int r, int c) const { return C[r * kDim + c]; }
+  SMPM_INLINE double* dev(int k) const { return s[k]; }
 };
 
 // The calling thread's share [begin, end) of n items in an omp parallel region: contiguous
@@ -199,24 +201,31 @@ inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
 }
 
 // Where the last gather pass stores the velocity gradient L [1/s] and the constitutive update
-// reads it: the particles' own arrays (ParticleView::Lxx...), or a block buffer of
+// reads it: the particles' own arrays (ParticleView::L), or a block buffer of
 // kern::g2p_blocks that holds it for one block of points (element 0 = the block's first point).
 // With the mid-step energy (kern::g2p_blocks' heating USL pass, q.mid = 0.5) it also carries the
-// symmetric mid-step rate D_mid (wxx, wyy, wxy: sym of sum_i (v_i^old + v_i^new) / 2 grad w_i^T),
+// symmetric mid-step rate D_mid (w: sym of sum_i (v_i^old + v_i^new) / 2 grad w_i^T),
 // whose work with the old stress is the energy increment (kern::constitutive_range); L itself is
 // always the updated one. Null where no pass writes it.
 struct Gradient {
-  double* xx; double* xy; double* yx; double* yy;
-  double* wxx = nullptr; double* wyy = nullptr; double* wxy = nullptr;
-  static Gradient of(const ParticleView& P) { return {P.Lxx, P.Lxy, P.Lyx, P.Lyy}; }
-  SMPM_INLINE double*& at(int r, int c) { return r == 0 ? (c == 0 ? xx : xy) : (c == 0 ? yx : yy); }
-  SMPM_INLINE double* at(int r, int c) const { return r == 0 ? (c == 0 ? xx : xy) : (c == 0 ? yx : yy); }
+  static constexpr int K = sym_size(kDim);
+  double* L[kDim * kDim] = {};  // row major
+  double* w[K] = {};            // mid-step rate by symmetric component (null: not written)
+  static Gradient of(const ParticleView& P) {
+    Gradient g;
+    for (int k = 0; k < kDim * kDim; ++k) g.L[k] = P.L[k];
+    return g;
+  }
+  SMPM_INLINE double*& at(int r, int c) { return L[r * kDim + c]; }
+  SMPM_INLINE double* at(int r, int c) const { return L[r * kDim + c]; }
   // the mid-step rate's symmetric component k (kernels/tensor.hpp's order)
-  SMPM_INLINE double*& work(int k) { return k == 0 ? wxx : k == 1 ? wyy : wxy; }
-  SMPM_INLINE double* work(int k) const { return k == 0 ? wxx : k == 1 ? wyy : wxy; }
+  SMPM_INLINE double*& work(int k) { return w[k]; }
+  SMPM_INLINE double* work(int k) const { return w[k]; }
   Gradient operator+(std::size_t k) const {
-    const auto off = [k](double* a) { return a ? a + k : nullptr; };
-    return {xx + k, xy + k, yx + k, yy + k, off(wxx), off(wyy), off(wxy)};
+    Gradient g;
+    for (int c = 0; c < kDim * kDim; ++c) g.L[c] = L[c] + k;
+    for (int c = 0; c < K; ++c) g.w[c] = w[c] ? w[c] + k : nullptr;
+    return g;
   }
 };
 

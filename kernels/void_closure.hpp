@@ -94,9 +94,9 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
 #pragma omp parallel for schedule(static) reduction(+ : merged)
   for (long p = 0; p < cnt; ++p) {
     if (field[p] == 0) continue;
-    Vec<kDim> xg;
-    for (int d = 0; d < kDim; ++d) xg[d] = (x[d][p] - g.origin(d)) / g.h;
-    const Stencil<Shape, kDim> st(xg, q.lp);
+    Vec<kDim> u;
+    for (int d = 0; d < kDim; ++d) u[d] = (x[d][p] - g.origin(d)) / g.h;
+    const Stencil<Shape, kDim> st(u, q.lp);
     unsigned all = 1u, any = 0u;  // bit 0 of every node's state, bit 1 of any
     st.for_each([&](const Idx<kDim>& a, int) {
       Idx<kDim> i;
@@ -124,13 +124,10 @@ struct CrackArrays {
   const double* m;
   double* V;
   double* p;
-  double* sxx;
-  double* syy;
-  double* sxy;
+  double* s[sym_size(kDim)];  // stress deviator by symmetric component
   double* q;          // artificial viscous pressure, or null
   const double* e;    // specific internal energy, or null (an EOS without energy)
-  const double* vx;
-  const double* vy;
+  const double* v[kDim];
   const std::uint8_t* body;
   const std::uint8_t* field;   // velocity field per point, or null (one field)
   const std::uint8_t* select;  // per body: whether this material's call handles it; null: all
@@ -148,8 +145,8 @@ struct CrackResult {
 
 // The points of cell k are order[cell_start[k] .. cell_start[k + 1]). Cells run in parallel
 // (a point is in one cell: race-free; a group's sums go in sorted order, so the result is the
-// same for any thread count). P = eos.cold(rho) + eos.gamma_rho() e; speed(rho, P, vx, vy) the
-// signal speed of an intact point.
+// same for any thread count). P = eos.cold(rho) + eos.gamma_rho() e; speed(rho, P, i) the
+// signal speed of intact point i.
 template <class Eos, class Speed>
 CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const std::uint32_t* cell_start,
                          std::size_t num_keys, const CrackParams& prm, const Eos& eos, Speed&& speed) {
@@ -185,7 +182,8 @@ CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const
       sv[g] += A.V[i];
       // the constitutive update stored zero stress on every fractured point: only those need
       // the EOS (the same expression it tested, so the same answer)
-      const bool zero = (A.p[i] == 0.0) & (A.sxx[i] == 0.0) & (A.syy[i] == 0.0) & (A.sxy[i] == 0.0);
+      bool zero = A.p[i] == 0.0;
+      for (int c = 0; c < sym_size(kDim); ++c) zero &= A.s[c][i] == 0.0;
       const bool fr = zero && eos.cold(A.m[i] / A.V[i]) + gr * energy(i) < prm.p_min;
       nfr[g] += fr;
       ncomp[g] += A.p[i] > 0.0;
@@ -204,10 +202,10 @@ CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const
         const bool fr = P < prm.p_min;
         A.p[i] = fr ? 0.0 : P;
         if (fr) {
-          A.sxx[i] = A.syy[i] = A.sxy[i] = 0.0;
+          for (double* a : A.s) a[i] = 0.0;
           if (A.q) A.q[i] = 0.0;
         } else {
-          vmax = std::max(vmax, speed(rho, P, A.vx[i], A.vy[i]));
+          vmax = std::max(vmax, speed(rho, P, i));
         }
         ++changed;
       }

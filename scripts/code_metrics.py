@@ -8,7 +8,7 @@
    nx, ny, sx, sy, or a name that is a known field or key with an axis suffix or prefix (sxx,
    Lxy, Cyx, gmx, dvy, px, fy, x0, y0, xmin, ymax, xg, yg, dwx, wy, bx, by, gravity_x, x_range,
    periodic_x, length_y, tiles_x, ...: the regular expression AXIS below), unless it is indexed
-   by an axis (x[d], xg[kDim]: d, e, r, c, a, k, D or kDim in the brackets). Loops over axes
+   by an axis (x[d], xg[kDim]: d, e, r, c, a, k, K, D, kDim or kDim * kDim in the brackets). Loops over axes
    (pos(d), v[d]) do not count.
 
   python3 scripts/code_metrics.py           # both figures
@@ -28,7 +28,7 @@ AXIS = re.compile(
     r"[a-z_]+_[xyz]|[xyz]_[a-z_]+|[a-z]+[xyz][xyz]p?|[a-z]+_[xyz][xyz])\b")
 
 
-AXIS_INDEX = re.compile(r"\s*\[\s*(?:d|e|r|c|a|k|D|kDim)\s*\]")
+AXIS_INDEX = re.compile(r"\s*\[\s*(?:d|e|r|c|a|k|K|D|(?:kern::)?kDim(?:\s*\*\s*(?:kern::)?kDim)?)\s*\]")
 
 
 def strip(text):

@@ -20,6 +20,15 @@ using namespace smpm::kern;
 
 namespace {
 
+// positions, velocities and velocity gradients the same, bit for bit
+void require_same_kinematics(const Particles& A, const Particles& B) {
+  for (int d = 0; d < kDim; ++d) {
+    REQUIRE(A.x[d] == B.x[d]);
+    REQUIRE(A.v[d] == B.v[d]);
+  }
+  for (int k = 0; k < kDim * kDim; ++k) REQUIRE(A.L[k] == B.L[k]);
+}
+
 // the position arrays of compute_keys
 std::array<const double*, kDim> xy(const double* x, const double* y) { return {x, y}; }
 
@@ -57,28 +66,28 @@ Particles random_particles(const GridGeom& g, std::size_t n, unsigned seed) {
   Particles P;
   P.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    P.x[i] = X(rng);
-    P.y[i] = Y(rng);
-    P.vx[i] = U(rng);
-    P.vy[i] = U(rng);
+    P.x[0][i] = X(rng);
+    P.x[1][i] = Y(rng);
+    P.v[0][i] = U(rng);
+    P.v[1][i] = U(rng);
     P.m[i] = 1.0 + 0.5 * U(rng);
     P.V[i] = 1e-5 * (1.0 + 0.1 * U(rng));
-    P.sxx[i] = 1e3 * U(rng);
-    P.syy[i] = 1e3 * U(rng);
-    P.sxy[i] = 1e3 * U(rng);
+    P.s[0][i] = 1e3 * U(rng);
+    P.s[1][i] = 1e3 * U(rng);
+    P.s[2][i] = 1e3 * U(rng);
     P.p[i] = 1e3 * U(rng);
-    P.Lxx[i] = 10 * U(rng);
-    P.Lxy[i] = 10 * U(rng);
-    P.Lyx[i] = 10 * U(rng);
-    P.Lyy[i] = 10 * U(rng);
+    P.L[0][i] = 10 * U(rng);
+    P.L[1][i] = 10 * U(rng);
+    P.L[2][i] = 10 * U(rng);
+    P.L[3][i] = 10 * U(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
   P.enable_affine(true);
   for (std::size_t i = 0; i < n; ++i) {
-    P.Cxx[i] = 10 * U(rng);
-    P.Cxy[i] = 10 * U(rng);
-    P.Cyx[i] = 10 * U(rng);
-    P.Cyy[i] = 10 * U(rng);
+    P.C[0][i] = 10 * U(rng);
+    P.C[1][i] = 10 * U(rng);
+    P.C[2][i] = 10 * U(rng);
+    P.C[3][i] = 10 * U(rng);
   }
   return P;
 }
@@ -94,7 +103,7 @@ Bins bin(const GridGeom& g, const Particles& P) {
   b.order.resize(n);
   b.start.resize(g.num_keys() + 1);
   b.hist.resize(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
-  REQUIRE(compute_keys(g, xy(P.x.data(), P.y.data()).data(), n, b.key.data()) == -1);
+  REQUIRE(compute_keys(g, xy(P.x[0].data(), P.x[1].data()).data(), n, b.key.data()) == -1);
   counting_sort(b.key.data(), n, g.num_keys(), b.hist.data(), b.start.data(), b.order.data());
   return b;
 }
@@ -143,7 +152,7 @@ void check_sort(const GridGeom& g, const Particles& P) {
   // the key maps back to the cell holding the particle (grid units as the transfers compute them)
   for (std::size_t i = 0; i < P.size(); i += 97) {
     const double inv_h = 1.0 / g.h;
-    const int cx = static_cast<int>((P.x[i] - g.lo[0]) * inv_h), cy = static_cast<int>((P.y[i] - g.lo[1]) * inv_h);
+    const int cx = static_cast<int>((P.x[0][i] - g.lo[0]) * inv_h), cy = static_cast<int>((P.x[1][i] - g.lo[1]) * inv_h);
     const int t = b1.key[i] / g.cells_per_tile(), l = b1.key[i] % g.cells_per_tile();
     REQUIRE((t % g.tiles(0)) * g.tile + l % g.tile == cx);
     REQUIRE((t / g.tiles(0)) * g.tile + l / g.tile == cy);
@@ -163,15 +172,15 @@ TEST_CASE("sort: every particle exactly once, cells in order, stable, thread-cou
     const Bins b = bin(g, P);
     Particles S = P;
     for (std::size_t s = 0; s < P.size(); ++s) {
-      S.x[s] = P.x[b.order[s]];
-      S.y[s] = P.y[b.order[s]];
+      S.x[0][s] = P.x[0][b.order[s]];
+      S.x[1][s] = P.x[1][b.order[s]];
     }
     std::mt19937_64 rng(5);
     std::uniform_int_distribution<std::size_t> pick(0, P.size() - 1);
     for (int k = 0; k < 200; ++k) {  // 1 % of the points jump elsewhere
       const std::size_t a = pick(rng), c = pick(rng);
-      S.x[a] = P.x[c];
-      S.y[a] = P.y[c];
+      S.x[0][a] = P.x[0][c];
+      S.x[1][a] = P.x[1][c];
     }
     check_sort(g, S);
   }
@@ -213,10 +222,10 @@ TEST_CASE("sort: the key's cell is the transfers' cell, on cell edges too, any t
 TEST_CASE("sort: a particle outside the grid is reported", "[sort]") {
   const GridGeom g = make_geom(false);
   Particles P = random_particles(g, 100, 3);
-  P.y[42] = g.lo[1] - 1e-9;
-  P.x[77] = std::nan("");
+  P.x[1][42] = g.lo[1] - 1e-9;
+  P.x[0][77] = std::nan("");
   std::vector<std::uint32_t> key(P.size());
-  REQUIRE(compute_keys(g, xy(P.x.data(), P.y.data()).data(), P.size(), key.data()) == 42);
+  REQUIRE(compute_keys(g, xy(P.x[0].data(), P.x[1].data()).data(), P.size(), key.data()) == 42);
 }
 
 namespace {
@@ -239,19 +248,19 @@ void check_conservation(bool periodic) {
   auto affine_L = [&](std::size_t i) {
     double w[S::N], dw[S::N];
     double D[2] = {0, 0};
-    const double xg[2] = {(P.x[i] - g.lo[0]) / g.h, (P.y[i] - g.lo[1]) / g.h};
+    const double xg[2] = {(P.x[0][i] - g.lo[0]) / g.h, (P.x[1][i] - g.lo[1]) / g.h};
     for (int d = 0; d < 2; ++d) {
       const int b = S::eval(xg[d], 0.25, w, dw);
       for (int a = 0; a < S::N; ++a) D[d] += w[a] * (b + a - xg[d]) * (b + a - xg[d]) * g.h * g.h;
     }
-    return P.m[i] * (P.x[i] * P.vy[i] - P.y[i] * P.vx[i]) + P.m[i] * (P.Cyx[i] * D[0] - P.Cxy[i] * D[1]);
+    return P.m[i] * (P.x[0][i] * P.v[1][i] - P.x[1][i] * P.v[0][i]) + P.m[i] * (P.C[2][i] * D[0] - P.C[1][i] * D[1]);
   };
   const bool exact_D = true;
   double M = 0, Px = 0, Py = 0, Lz = 0, Fx = 0, Fy = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     M += P.m[i];
-    Px += P.m[i] * P.vx[i];
-    Py += P.m[i] * P.vy[i];
+    Px += P.m[i] * P.v[0][i];
+    Py += P.m[i] * P.v[1][i];
     Lz += affine_L(i);
   }
   double gm = 0, gpx = 0, gpy = 0, gL = 0;
@@ -282,8 +291,8 @@ void check_conservation(bool periodic) {
   g2p<S, false, G2PWhat::Full>(g, G, pv, P.size(), G2PParams{0.0, 0.25, 0.0});
   double Px2 = 0, Py2 = 0, Lz2 = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    Px2 += P.m[i] * P.vx[i];
-    Py2 += P.m[i] * P.vy[i];
+    Px2 += P.m[i] * P.v[0][i];
+    Py2 += P.m[i] * P.v[1][i];
     Lz2 += affine_L(i);
   }
   CHECK(Px2 == Approx(gpx).epsilon(1e-12).margin(1e-10));
@@ -429,15 +438,15 @@ void check_occupied_box(bool periodic) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> X(g.lo[0] + 17.3 * g.h, g.lo[0] + 40.6 * g.h), Y(g.lo[1] + 9.5 * g.h, g.lo[1] + 25.2 * g.h);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    if (!periodic) P.x[i] = X(rng);
-    P.y[i] = Y(rng);
+    if (!periodic) P.x[0][i] = X(rng);
+    P.x[1][i] = Y(rng);
   }
   // the stencils' extremes: a point on the lower edge of a tile's first cell (it reaches the
   // node below that cell) and one at the top of a tile's last cell (two nodes above it)
-  P.x[0] = g.lo[0] + 16 * g.h;
-  P.y[0] = g.lo[1] + 24 * g.h;
-  P.x[1] = g.lo[0] + 47.999 * g.h;
-  P.y[1] = g.lo[1] + 31.999 * g.h;
+  P.x[0][0] = g.lo[0] + 16 * g.h;
+  P.x[1][0] = g.lo[1] + 24 * g.h;
+  P.x[0][1] = g.lo[0] + 47.999 * g.h;
+  P.x[1][1] = g.lo[1] + 31.999 * g.h;
   Bins b = bin(g, P);
   const NodeBox box = occupied_nodes(g, b.start.data());
   // the box is the occupied tiles' node blocks, not the grid
@@ -490,9 +499,7 @@ void check_occupied_box(bool periodic) {
     std::vector<double> rfa(kRowSlots * static_cast<std::size_t>(g.num_lines()), 1.0), rfb = rfa;
     transfer(a, g.all_nodes(), PA, musl, rfa);
     transfer(c, box, PB, musl, rfb);
-    for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::Lxx, &Particles::Lxy,
-                   &Particles::Lyx, &Particles::Lyy})
-      REQUIRE(PA.*f == PB.*f);
+    require_same_kinematics(PA, PB);
     REQUIRE(rfa == rfb);  // wall reactions, 0 on the rows outside the box
     // inside the box the grids agree; outside, the box pass wrote nothing
     std::size_t outside = 0;
@@ -536,9 +543,9 @@ TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities
   auto pa = A.view(), pb = B.view();
   g2p<Linear, true, G2PWhat::Velocity>(g, G, pa, A.size(), gq);                      // pure FLIP body
   g2p_loop<Linear, true, G2PWhat::Velocity, false, false, false>(g, G, pb, B.size(), gq);  // the blend
-  REQUIRE(A.vx == B.vx);
-  REQUIRE(A.vy == B.vy);
-  REQUIRE(A.vx != P.vx);
+  REQUIRE(A.v[0] == B.v[0]);
+  REQUIRE(A.v[1] == B.v[1]);
+  REQUIRE(A.v[0] != P.v[0]);
 }
 
 namespace {
@@ -562,12 +569,10 @@ void check_heat_sink() {
   pb.e = sink.data();
   g2p<S, FLIP, What>(g, G, pa, A.size(), gq);
   g2p<S, FLIP, What, true>(g, G, pb, B.size(), gq);
-  for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::Lxx, &Particles::Lxy,
-                 &Particles::Lyx, &Particles::Lyy})
-    REQUIRE(A.*f == B.*f);
+  require_same_kinematics(A, B);
   if constexpr (!FLIP)
-    for (auto f : {&Particles::Cxx, &Particles::Cxy, &Particles::Cyx, &Particles::Cyy}) REQUIRE(A.*f == B.*f);
-  REQUIRE(A.vx != P.vx);
+    for (int k = 0; k < kDim * kDim; ++k) REQUIRE(A.C[k] == B.C[k]);
+  REQUIRE(A.v[0] != P.v[0]);
   REQUIRE(std::any_of(sink.begin(), sink.end(), [](double e) { return e != 0.0; }));  // it did heat
 }
 
@@ -636,13 +641,16 @@ void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
                                                                                  scratch.data(), store, after);
       REQUIRE(r.bad == ref.bad);
       REQUIRE(r.max_speed == ref.max_speed);
-      for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::V, &Particles::sxx,
-                     &Particles::syy, &Particles::sxy, &Particles::p, &Particles::e, &Particles::epsp, &Particles::q})
-        REQUIRE(F.*f == R.*f);
+      for (int d = 0; d < kDim; ++d) {
+        REQUIRE(F.x[d] == R.x[d]);
+        REQUIRE(F.v[d] == R.v[d]);
+      }
+      for (int k = 0; k < kSym; ++k) REQUIRE(F.s[k] == R.s[k]);
+      for (auto f : {&Particles::V, &Particles::p, &Particles::e, &Particles::epsp, &Particles::q}) REQUIRE(F.*f == R.*f);
       if constexpr (APIC)
-        for (auto f : {&Particles::Cxx, &Particles::Cxy, &Particles::Cyx, &Particles::Cyy}) REQUIRE(F.*f == R.*f);
-      for (auto f : {&Particles::Lxx, &Particles::Lxy, &Particles::Lyx, &Particles::Lyy})
-        REQUIRE(F.*f == (store ? R.*f : P.*f));  // not stored: the arrays keep what they held
+        for (int k = 0; k < kDim * kDim; ++k) REQUIRE(F.C[k] == R.C[k]);
+      for (int k = 0; k < kDim * kDim; ++k)
+        REQUIRE(F.L[k] == (store ? R.L[k] : P.L[k]));  // not stored: the arrays keep what they held
     }
   }
   omp_set_num_threads(threads0);

@@ -28,7 +28,7 @@ const MieGruneisenEos kAl = MieGruneisenEos::make(2700.0, 5350.0, 1.34, 2.0);
 constexpr double kPmin = -1e9;  // spall strength 1 GPa
 
 struct Pts {
-  std::vector<double> m, V, p, sxx, syy, sxy, q, e, vx, vy;
+  std::vector<double> m, V, p, s[3], q, e, v[2];  // s: xx, yy, xy
   std::vector<std::uint8_t> body, field;
   void add(double rho, double e_, std::uint8_t f, double mass = 1e-8) {
     m.push_back(mass);
@@ -36,19 +36,19 @@ struct Pts {
     const double P = kAl.pressure(rho, e_);
     const bool fr = P < kPmin;
     p.push_back(fr ? 0.0 : P);
-    sxx.push_back(fr ? 0.0 : 1e7);
-    syy.push_back(fr ? 0.0 : -1e7);
-    sxy.push_back(fr ? 0.0 : 2e6);
+    s[0].push_back(fr ? 0.0 : 1e7);
+    s[1].push_back(fr ? 0.0 : -1e7);
+    s[2].push_back(fr ? 0.0 : 2e6);
     q.push_back(fr ? 0.0 : 1e6);
     e.push_back(e_);
-    vx.push_back(1.0);
-    vy.push_back(-2.0);
+    v[0].push_back(1.0);
+    v[1].push_back(-2.0);
     body.push_back(0);
     field.push_back(f);
   }
   CrackArrays arrays() {
-    return {m.data(), V.data(), p.data(), sxx.data(), syy.data(), sxy.data(), q.data(), e.data(),
-            vx.data(), vy.data(), body.data(), field.data(), nullptr};
+    return {m.data(), V.data(), p.data(), {s[0].data(), s[1].data(), s[2].data()}, q.data(), e.data(),
+            {v[0].data(), v[1].data()}, body.data(), field.data(), nullptr};
   }
 };
 
@@ -57,8 +57,8 @@ CrackResult run_close(Pts& P, const std::vector<std::uint32_t>& cell_start) {
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
   const CrackParams prm{kPmin, 1350.0};
   return close_cracks(P.arrays(), order.data(), cell_start.data(), cell_start.size() - 1, prm, kAl,
-                      [](double rho, double, double vx, double vy) {
-                        return std::sqrt(kAl.bulk_modulus(rho, 0.0) / rho) + std::hypot(vx, vy);
+                      [&P](double rho, double, std::uint32_t i) {
+                        return std::sqrt(kAl.bulk_modulus(rho, 0.0) / rho) + std::hypot(P.v[0][i], P.v[1][i]);
                       });
 }
 
@@ -95,8 +95,8 @@ TEST_CASE("close_cracks: a fractured point among compressed cell-mates shares th
     CHECK(P.p[i] == Approx(kAl.pressure(rho, P.e[i])).epsilon(1e-12));
     CHECK(P.p[i] > 0.0);  // the crack closed: it carries pressure again
   }
-  CHECK(P.sxx[3] == 0.0);        // the formerly fractured point starts from zero deviator
-  CHECK(P.sxx[0] == before.sxx[0]);  // the others keep theirs
+  CHECK(P.s[0][3] == 0.0);        // the formerly fractured point starts from zero deviator
+  CHECK(P.s[0][0] == before.s[0][0]);  // the others keep theirs
   CHECK(P.q[0] == before.q[0]);
   // cells 1 to 3 untouched
   for (std::size_t i = 4; i < P.m.size(); ++i) {
@@ -110,13 +110,13 @@ TEST_CASE("close_cracks: a group still in tension past the cutoff stays fracture
   P.add(2710.0, 0.0, 0);  // barely compressed
   P.add(2200.0, 0.0, 0);  // deeply cracked
   P.add(2200.0, 0.0, 0);
-  const double sxx0 = P.sxx[0];
+  const double sxx0 = P.s[0][0];
   REQUIRE(sxx0 != 0.0);
   const CrackResult r = run_close(P, {0, 3});
   CHECK(r.changed == 3);
   for (int i = 0; i < 3; ++i) {
     CHECK(P.p[i] == 0.0);
-    CHECK(P.sxx[i] == 0.0);
+    CHECK(P.s[0][i] == 0.0);
     CHECK(P.q[i] == 0.0);
   }
 }
@@ -144,7 +144,7 @@ TEST_CASE("close_cracks: the same for any thread count", "[unit][porous][determi
   CHECK(ra.max_speed == rb.max_speed);
   CHECK((a.V == b.V));
   CHECK((a.p == b.p));
-  CHECK((a.sxx == b.sxx));
+  CHECK((a.s[0] == b.s[0]));
 }
 
 TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are full and one is welded", "[unit][porous]") {
