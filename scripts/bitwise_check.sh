@@ -6,7 +6,8 @@
 # cubic, heat conduction) and the two-disk contact case.
 #   bash scripts/bitwise_check.sh DRIVER OUTDIR [REFDIR]
 # Without REFDIR it only runs. With REFDIR it prints one line per case and exits non-zero when
-# any file differs. FILTER=regex runs only the matching case names.
+# any file differs. FILTER=regex runs only the matching case names; RERUN=1 runs again the
+# cases whose output is there already. Needs h5diff (Debian package hdf5-tools).
 set -uo pipefail
 drv=$(readlink -f "$1"); out=$2; ref=${3:-}
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
