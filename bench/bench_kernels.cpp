@@ -164,21 +164,11 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double d = kH / kPpc;
   for (std::size_t i = 0; i < n; ++i) {
-    P.x[0][i] += 0.4 * d * u(rng);
-    P.x[1][i] += 0.4 * d * u(rng);
-    P.v[0][i] = 10.0 * u(rng);
-    P.v[1][i] = 10.0 * u(rng);
-    P.L[0][i] = 1e3 * u(rng);
-    P.L[1][i] = 1e3 * u(rng);
-    P.L[2][i] = 1e3 * u(rng);
-    P.L[3][i] = 1e3 * u(rng);
-    P.C[0][i] = 1e3 * u(rng);
-    P.C[1][i] = 1e3 * u(rng);
-    P.C[2][i] = 1e3 * u(rng);
-    P.C[3][i] = 1e3 * u(rng);
-    P.s[0][i] = 1e7 * u(rng);
-    P.s[1][i] = 1e7 * u(rng);
-    P.s[2][i] = 1e7 * u(rng);
+    for (auto& a : P.x) a[i] += 0.4 * d * u(rng);
+    for (auto& a : P.v) a[i] = 10.0 * u(rng);
+    for (auto& a : P.L) a[i] = 1e3 * u(rng);
+    for (auto& a : P.C) a[i] = 1e3 * u(rng);
+    for (auto& a : P.s) a[i] = 1e7 * u(rng);
     P.p[i] = 1e8 * u(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
