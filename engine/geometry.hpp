@@ -1,0 +1,55 @@
+// The engine's geometry over kern::kDim axes: positions and velocities, boxes, the impact axis,
+// and loops over boxes of lattice indices.
+#pragma once
+#include "kernels/tensor.hpp"
+
+namespace smpm {
+
+// The axis the shock travels along (y): impact velocities, mirror copies, the front, the bands
+// of [[regions]] and free surfaces are taken along it; the other axes are lateral.
+inline constexpr int kImpactAxis = 1;
+
+// A position [m] or a velocity [m/s], one component per axis.
+using Vector = kern::Vec<kern::kDim>;
+// Lattice indices (points, pixels, buckets), one per axis.
+using Index = kern::Vec<kern::kDim, long>;
+
+// An axis-aligned box [lo, hi] [m].
+struct Box {
+  Vector lo{}, hi{};
+};
+
+// Whether p lies in the closed box [lo, hi].
+inline bool in_box(const Box& b, const Vector& p) {
+  for (int d = 0; d < kern::kDim; ++d)
+    if (!(p[d] >= b.lo[d] && p[d] <= b.hi[d])) return false;
+  return true;
+}
+
+// Calls f(i) for every index i with first[d] <= i[d] <= last[d] on every axis d, axis 0 fastest
+// (the last axis in the outer loop); none when a range is empty.
+template <class F>
+void for_each_index(const Index& first, const Index& last, F&& f) {
+  for (int d = 0; d < kern::kDim; ++d)
+    if (first[d] > last[d]) return;
+  Index i = first;
+  for (;;) {
+    f(static_cast<const Index&>(i));
+    int d = 0;
+    while (d < kern::kDim && i[d] == last[d]) {
+      i[d] = first[d];
+      ++d;
+    }
+    if (d == kern::kDim) return;
+    ++i[d];
+  }
+}
+
+// Position of index i in a row-major array of n[0] x n[1] x ... entries, axis 0 fastest.
+inline long linear_index(const Index& i, const Index& n) {
+  long k = i[kern::kDim - 1];
+  for (int d = kern::kDim - 2; d >= 0; --d) k = k * n[d] + i[d];
+  return k;
+}
+
+}  // namespace smpm
