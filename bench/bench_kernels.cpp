@@ -153,7 +153,8 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   g.lo[1] = 0.0;
   const Material mat = bench_material();
   Particles& P = s->P;
-  P = fill_rectangle(g, kPpc, g.lo[0], g.lo[0] + g.length(0), g.lo[1], g.lo[1] + g.length(1), mat.rho0, 0.0, 0.0, 0);
+  P = fill_rectangle(g, kPpc, Box{{g.lo[0], g.lo[1]}, {g.lo[0] + g.length(0), g.lo[1] + g.length(1)}}, mat.rho0,
+                     Vector{0.0, 0.0}, 0);
   if (P.size() != n) {
     s->error = "fill_rectangle made " + std::to_string(P.size()) + " particles, expected " + std::to_string(n);
     return s;
@@ -335,7 +336,8 @@ std::unique_ptr<StepTemplate> build_step_template(std::size_t n) {
   g.n[1] = by + 2 * gap;
   const Material mat = bench_material();
   Particles& P = s->P;
-  P = fill_rectangle(g, kPpc, gap * kH, (gap + bx) * kH, gap * kH, (gap + by) * kH, mat.rho0, 0.0, 0.0, 0);
+  P = fill_rectangle(g, kPpc, Box{{gap * kH, gap * kH}, {(gap + bx) * kH, (gap + by) * kH}}, mat.rho0,
+                     Vector{0.0, 0.0}, 0);
   if (P.size() != n) {
     s->error = "fill_rectangle made " + std::to_string(P.size()) + " particles, expected " + std::to_string(n);
     return s;

@@ -3,22 +3,25 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 namespace smpm {
 
-double front_position(const Particles& P, std::uint8_t body, double vy0, double y0, double dy, int rows,
+double front_position(const Particles& P, std::uint8_t body, double u0, double lo, double h, int rows,
                       bool from_top) {
+  const std::vector<double>& pos = P.pos(kImpactAxis);
+  const std::vector<double>& vel = P.vel(kImpactAxis);
   std::vector<double> sum(rows, 0.0);
   std::vector<int> count(rows, 0);
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (P.body[i] != body) continue;
-    const int r = static_cast<int>(std::floor((P.pos(1)[i] - y0) / dy));
+    const int r = static_cast<int>(std::floor((pos[i] - lo) / h));
     if (r < 0 || r >= rows) continue;
-    sum[r] += P.vel(1)[i];
+    sum[r] += vel[i];
     ++count[r];
   }
-  const double level = 0.5 * std::fabs(vy0);
-  auto dev = [&](int r) { return std::fabs(sum[r] / count[r] - vy0); };
+  const double level = 0.5 * std::fabs(u0);
+  auto dev = [&](int r) { return std::fabs(sum[r] / count[r] - u0); };
   int prev = -1;  // previous occupied row in scan order
   for (int k = 0; k < rows; ++k) {
     const int r = from_top ? rows - 1 - k : k;
@@ -28,9 +31,9 @@ double front_position(const Particles& P, std::uint8_t body, double vy0, double 
       // the first occupied row from the far end is reached: the wave has arrived at the body's
       // far end (a free top released, ejecta flying): no front left to track
       if (prev < 0) return std::numeric_limits<double>::quiet_NaN();
-      const double yc = y0 + (r + 0.5) * dy;
-      const double yp = y0 + (prev + 0.5) * dy, dp = dev(prev);
-      return yp + (yc - yp) * (level - dp) / (d - dp);
+      const double at = lo + (r + 0.5) * h;
+      const double at_prev = lo + (prev + 0.5) * h, dp = dev(prev);
+      return at_prev + (at - at_prev) * (level - dp) / (d - dp);
     }
     prev = r;
   }
@@ -49,11 +52,11 @@ Moments moments(const std::vector<double>& v) {
   if (v.empty()) return m;
   const double n = static_cast<double>(v.size());
   double s = 0;
-  for (double x : v) s += x;
+  for (double value : v) s += value;
   m.mean = s / n;
   double m2 = 0, m3 = 0, m4 = 0;
-  for (double x : v) {
-    const double d = x - m.mean, d2 = d * d;
+  for (double value : v) {
+    const double d = value - m.mean, d2 = d * d;
     m2 += d2;
     m3 += d2 * d;
     m4 += d2 * d2;
@@ -82,7 +85,8 @@ Moments moments(const std::vector<double>& v) {
 // it made a band's open porosity -40 instead of +0.02. An unstressed point at rho0 holds V
 // either way.
 static double solid_volume(const Particles& P, std::size_t i, const Material& mat) {
-  const bool fractured = P.p[i] == 0.0 && P.dev(0)[i] == 0.0 && P.dev(1)[i] == 0.0 && P.dev(2)[i] == 0.0;
+  bool fractured = P.p[i] == 0.0;
+  for (int k = 0; k < kern::sym_size(kern::kDim); ++k) fractured = fractured && P.dev(k)[i] == 0.0;
   if (!fractured || mat.rho0 <= 0.0) return P.V[i];
   const double rho_zp = mat.eos == EosKind::MieGruneisen && !P.e.empty()
                             ? mat.mie_gruneisen().zero_pressure_density(P.e[i])
@@ -92,22 +96,32 @@ static double solid_volume(const Particles& P, std::size_t i, const Material& ma
   return rho_zp > 0.0 ? std::min(P.V[i], P.m[i] / rho_zp) : P.V[i];
 }
 
+// The velocity gradient L of point i [1/s] (Particles::grad has no const overload: read only).
+static kern::Mat<kern::kDim> velocity_gradient(const Particles& P, std::size_t i) {
+  auto& Q = const_cast<Particles&>(P);
+  kern::Mat<kern::kDim> L;
+  for (int r = 0; r < kern::kDim; ++r)
+    for (int c = 0; c < kern::kDim; ++c) L(r, c) = Q.grad(r, c)[i];
+  return L;
+}
+
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
                                       const std::vector<int>& body_material, bool gradient_current) {
   const std::size_t nr = regions.size();
-  std::vector<std::vector<double>> p(nr), T(nr), rho(nr), uy(nr);
+  std::vector<std::vector<double>> p(nr), T(nr), rho(nr), u(nr);  // u: velocity along the impact axis
   std::vector<RegionStats> out(nr);
+  const std::vector<double>& pos = P.pos(kImpactAxis);
   for (std::size_t i = 0; i < P.size(); ++i) {
     for (std::size_t r = 0; r < nr; ++r) {
       const Region& g = regions[r];
-      if (P.body[i] != g.body || P.pos(1)[i] < g.y0 || P.pos(1)[i] > g.y1) continue;
+      if (P.body[i] != g.body || pos[i] < g.lo || pos[i] > g.hi) continue;
       const int k = body_material[P.body[i]];
       p[r].push_back(P.p[i]);
       T[r].push_back(particle_temperature(P, i, thermo[k], materials[k]));
       rho[r].push_back(P.m[i] / P.V[i]);
-      uy[r].push_back(P.vel(1)[i]);
-      const auto gm = gradient_measures(P.grad(0, 0)[i], P.grad(0, 1)[i], P.grad(1, 0)[i], P.grad(1, 1)[i]);
+      u[r].push_back(P.vel(kImpactAxis)[i]);
+      const auto gm = gradient_measures(velocity_gradient(P, i));
       out[r].R2 += gm.R2;
       out[r].D2 += gm.D2;
       out[r].S2 += gm.S2;
@@ -126,142 +140,192 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       s.R /= s.count;
       s.D /= s.count;
     }
-    const double area = regions[r].width * (regions[r].y1 - regions[r].y0);
+    const double area = regions[r].width * (regions[r].hi - regions[r].lo);
     s.open = area > 0.0 ? 1.0 - s.open / area : std::numeric_limits<double>::quiet_NaN();
     if (!gradient_current) s.R2 = s.D2 = s.S2 = s.R = s.D = std::numeric_limits<double>::quiet_NaN();
     s.P = moments(p[r]);
     s.T = moments(T[r]);
     s.rho = moments(rho[r]);
-    s.Uy = moments(uy[r]);
+    s.Uy = moments(u[r]);
   }
   return out;
 }
 
 namespace {
 
-// open_area's image: nx x ny pixels of px x pixel [m] from (bx0, by0), each 0 (uncovered), 1
-// (covered by a point's disk) or 2 (uncovered and connected to the border: outside the body).
-// wrap: x is periodic over the nx pixels.
+constexpr int kDim = kern::kDim;
+
+// open_area's image: n[d] pixels of size step[d] along each axis d [m] from the corner lo, axis 0
+// fastest, each 0 (uncovered), 1 (covered by a point's disk) or 2 (uncovered and connected to the
+// border: outside the body). wrap[d]: axis d is periodic over its n[d] pixels.
 struct Raster {
-  double bx0, by0, px, pixel;
-  long nx, ny;
-  bool wrap;
+  Vector lo, step;
+  Index n;
+  bool wrap[kDim];
   std::vector<std::uint8_t> img;
+  std::size_t at(const Index& i) const { return static_cast<std::size_t>(linear_index(i, n)); }
+  Index last() const {
+    Index l;
+    for (int d = 0; d < kDim; ++d) l[d] = n[d] - 1;
+    return l;
+  }
 };
 
 // Marks the pixels whose centre lies in a body point's disk, radius * sqrt(V_p) capped at rmax.
 void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
-  const double bx0 = R.bx0, by0 = R.by0, px = R.px, pixel = R.pixel;
-  const long nx = R.nx, ny = R.ny;
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
     const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
-    const long j0 = std::max(0L, static_cast<long>(std::ceil((P.pos(1)[p] - rad - by0) / pixel - 0.5)));
-    const long j1 = std::min(ny - 1, static_cast<long>(std::floor((P.pos(1)[p] + rad - by0) / pixel - 0.5)));
-    const long i0 = static_cast<long>(std::ceil((P.pos(0)[p] - rad - bx0) / px - 0.5));
-    const long i1 = static_cast<long>(std::floor((P.pos(0)[p] + rad - bx0) / px - 0.5));
-    for (long j = j0; j <= j1; ++j)
-      for (long i = i0; i <= i1; ++i) {
-        const double ex = bx0 + (i + 0.5) * px - P.pos(0)[p], ey = by0 + (j + 0.5) * pixel - P.pos(1)[p];
-        if (ex * ex + ey * ey > r2) continue;
-        long ii = i;
-        if (R.wrap) ii = ((ii % nx) + nx) % nx;
-        else if (ii < 0 || ii >= nx) continue;
-        R.img[static_cast<std::size_t>(j * nx + ii)] = 1;
+    Vector c;
+    Index first, last;  // the pixels of the disk's bounding box (those of a wrapping axis unwrapped)
+    for (int d = 0; d < kDim; ++d) {
+      c[d] = P.pos(d)[p];
+      first[d] = static_cast<long>(std::ceil((c[d] - rad - R.lo[d]) / R.step[d] - 0.5));
+      last[d] = static_cast<long>(std::floor((c[d] + rad - R.lo[d]) / R.step[d] - 0.5));
+      if (!R.wrap[d]) {
+        first[d] = std::max(0L, first[d]);
+        last[d] = std::min(R.n[d] - 1, last[d]);
       }
+    }
+    for_each_index(first, last, [&](const Index& i) {
+      double e[kDim];  // pixel centre - point [m]
+      for (int d = 0; d < kDim; ++d) e[d] = R.lo[d] + (i[d] + 0.5) * R.step[d] - c[d];
+      if (kern::norm2(e) > r2) return;
+      Index w = i;
+      for (int d = 0; d < kDim; ++d)
+        if (R.wrap[d]) w[d] = ((w[d] % R.n[d]) + R.n[d]) % R.n[d];
+      R.img[R.at(w)] = 1;
+    });
   }
 }
 
-// Floods the outside (2) from the border rows, and columns without wrap.
+// Floods the outside (2) from the border: both ends of every axis that does not wrap.
 void flood_outside(Raster& R) {
-  const long nx = R.nx, ny = R.ny;
   std::vector<long> stack;
-  auto seed = [&](long i, long j) {
-    std::uint8_t& v = R.img[static_cast<std::size_t>(j * nx + i)];
+  auto seed = [&](const Index& i) {
+    const long k = linear_index(i, R.n);
+    std::uint8_t& v = R.img[static_cast<std::size_t>(k)];
     if (v == 0) {
       v = 2;
-      stack.push_back(j * nx + i);
+      stack.push_back(k);
     }
   };
-  for (long i = 0; i < nx; ++i) {
-    seed(i, 0);
-    seed(i, ny - 1);
+  const Index last = R.last();
+  for (int d = 0; d < kDim; ++d) {
+    if (R.wrap[d]) continue;
+    Index first{}, end = last;
+    end[d] = 0;  // the face at index 0 of axis d, then the one at its last index
+    for_each_index(first, end, seed);
+    first[d] = last[d];
+    for_each_index(first, last, seed);
   }
-  if (!R.wrap)
-    for (long j = 0; j < ny; ++j) {
-      seed(0, j);
-      seed(nx - 1, j);
-    }
   while (!stack.empty()) {
-    const long k = stack.back();
+    long k = stack.back();
     stack.pop_back();
-    const long i = k % nx, j = k / nx;
-    if (j > 0) seed(i, j - 1);
-    if (j < ny - 1) seed(i, j + 1);
-    if (R.wrap) {
-      seed((i + 1) % nx, j);
-      seed((i + nx - 1) % nx, j);
-    } else {
-      if (i > 0) seed(i - 1, j);
-      if (i < nx - 1) seed(i + 1, j);
+    Index i;
+    for (int d = 0; d < kDim; ++d) {
+      i[d] = k % R.n[d];
+      k /= R.n[d];
+    }
+    for (int d = 0; d < kDim; ++d) {
+      Index j = i;
+      if (R.wrap[d]) {
+        j[d] = (i[d] + 1) % R.n[d];
+        seed(j);
+        j[d] = (i[d] + R.n[d] - 1) % R.n[d];
+        seed(j);
+        continue;
+      }
+      if (i[d] > 0) {
+        j[d] = i[d] - 1;
+        seed(j);
+      }
+      if (i[d] < last[d]) {
+        j[d] = i[d] + 1;
+        seed(j);
+      }
     }
   }
 }
 
 // Adds the area of the void pixels (0) whose centre lies in each window to area[window] [m^2].
 void add_void_area(const Raster& R, const std::vector<Window>& windows, std::vector<double>& area) {
-  for (long j = 0; j < R.ny; ++j) {
-    const double yc = R.by0 + (j + 0.5) * R.pixel;
-    for (long i = 0; i < R.nx; ++i) {
-      if (R.img[static_cast<std::size_t>(j * R.nx + i)] != 0) continue;
-      const double xc = R.bx0 + (i + 0.5) * R.px;
-      for (std::size_t w = 0; w < windows.size(); ++w) {
-        const Window& W = windows[w];
-        if (yc >= W.y0 && yc <= W.y1 && xc >= W.x0 && xc <= W.x1) area[w] += R.px * R.pixel;
-      }
+  double pixel_area = R.step[0];
+  for (int d = 1; d < kDim; ++d) pixel_area *= R.step[d];
+  for_each_index(Index{}, R.last(), [&](const Index& i) {
+    if (R.img[R.at(i)] != 0) return;
+    Vector c;  // the pixel's centre [m]
+    for (int d = 0; d < kDim; ++d) c[d] = R.lo[d] + (i[d] + 0.5) * R.step[d];
+    for (std::size_t w = 0; w < windows.size(); ++w)
+      if (in_box(windows[w], c)) area[w] += pixel_area;
+  });
+}
+
+// The image over box b, the body's bounding box padded by `pad` on every side (a wrapping axis:
+// the period from `start` instead); nullopt beyond 4e8 pixels. Lateral axes hold a whole number of
+// pixels of about `pixel` (a period tiles exactly), the impact axis pixels of side `pixel`.
+std::optional<Raster> make_raster(Box b, double pixel, double pad, double period, double start) {
+  Raster R;
+  double nd[kDim], total = 1.0;  // pixels per axis, and in all
+  for (int d = 0; d < kDim; ++d) {
+    R.wrap[d] = d == 0 && period > 0.0;
+    if (R.wrap[d]) {
+      b.lo[d] = start;
+      b.hi[d] = start + period;
+    } else {
+      b.lo[d] -= pad;
+      b.hi[d] += pad;
     }
   }
+  for (int d = 0; d < kDim; ++d) {
+    nd[d] = d == kImpactAxis ? std::ceil((b.hi[d] - b.lo[d]) / pixel)
+                             : std::max(1.0, std::round((b.hi[d] - b.lo[d]) / pixel));
+    total *= nd[d];
+  }
+  if (!(total <= 4e8)) return std::nullopt;
+  long pixels = 1;
+  for (int d = 0; d < kDim; ++d) {
+    R.lo[d] = b.lo[d];
+    R.n[d] = static_cast<long>(nd[d]);
+    R.step[d] = d == kImpactAxis ? pixel : (b.hi[d] - b.lo[d]) / nd[d];
+    pixels *= R.n[d];
+  }
+  R.img.assign(static_cast<std::size_t>(pixels), 0);
+  return R;
 }
 
 }  // namespace
 
 std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
-                              double pixel, double radius, double period, double xp0) {
+                              double pixel, double radius, double period, double start) {
   std::vector<double> area(windows.size(), 0.0);
-  double bx0 = 1e300, bx1 = -1e300, by0 = 1e300, by1 = -1e300, smax = 0.0;
+  Box b;  // the body's bounding box [m]
+  double smax = 0.0;
+  for (int d = 0; d < kDim; ++d) {
+    b.lo[d] = 1e300;
+    b.hi[d] = -1e300;
+  }
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
-    bx0 = std::min(bx0, P.pos(0)[p]); bx1 = std::max(bx1, P.pos(0)[p]);
-    by0 = std::min(by0, P.pos(1)[p]); by1 = std::max(by1, P.pos(1)[p]);
+    for (int d = 0; d < kDim; ++d) {
+      b.lo[d] = std::min(b.lo[d], P.pos(d)[p]);
+      b.hi[d] = std::max(b.hi[d], P.pos(d)[p]);
+    }
     smax = std::max(smax, std::sqrt(P.V[p]));
   }
-  if (bx1 < bx0 || !(pixel > 0.0)) return area;
+  if (b.hi[0] < b.lo[0] || !(pixel > 0.0)) return area;
   // a point blown up to a huge volume (a failing run's debris) would make the image huge: disks
   // are capped at 16 pixels of radius, and an image over 4e8 pixels is not drawn (NaN)
   const double rmax = 16.0 * pixel;
   smax = std::min(smax, rmax / std::max(radius, 1e-3));
-  const bool wrap = period > 0.0;
-  const double pad = 2.0 * pixel + smax;
-  if (wrap) {
-    bx0 = xp0;
-    bx1 = xp0 + period;
-  } else {
-    bx0 -= pad;
-    bx1 += pad;
-  }
-  by0 -= pad;
-  by1 += pad;
-  const double nxd = std::max(1.0, std::round((bx1 - bx0) / pixel)), nyd = std::ceil((by1 - by0) / pixel);
-  if (!(nxd * nyd <= 4e8)) {
+  std::optional<Raster> R = make_raster(b, pixel, 2.0 * pixel + smax, period, start);
+  if (!R) {
     std::fill(area.begin(), area.end(), std::numeric_limits<double>::quiet_NaN());
     return area;
   }
-  const long nx = static_cast<long>(nxd), ny = static_cast<long>(nyd);
-  const double px = (bx1 - bx0) / nxd;  // pixel width (wrap: the period tiles exactly)
-  Raster R{bx0, by0, px, pixel, nx, ny, wrap, std::vector<std::uint8_t>(static_cast<std::size_t>(nx * ny), 0)};
-  cover_disks(R, P, body, radius, rmax);
-  flood_outside(R);
-  add_void_area(R, windows, area);
+  cover_disks(*R, P, body, radius, rmax);
+  flood_outside(*R);
+  add_void_area(*R, windows, area);
   return area;
 }
 

@@ -5,37 +5,38 @@
 #include <string>
 #include <vector>
 
+#include "engine/geometry.hpp"
 #include "engine/particles.hpp"
 #include "engine/thermo.hpp"
+#include "kernels/tensor.hpp"
 
 namespace smpm {
 
-// Leading edge of the compression wave in one body, along y. The body's particles are binned
-// in rows of height `dy` (the cell size); a row is "reached" when its mean y-velocity differs
-// from the body's initial vy0 by more than half of |vy0| (half the particle-velocity jump of an
-// impact that brings it to rest). Scanning from the end away from the impact plane (`from_top`:
-// the body lies above the plane), the front is where the mean crosses that level, interpolated
-// linearly between row centres. Returns NaN when no row is reached, and when the first occupied
-// row from the far end is reached already: the wave has arrived there (front.csv then ends
-// rather than follow the released top or its ejecta). Needs vy0 != 0.
-double front_position(const Particles& P, std::uint8_t body, double vy0, double y0, double dy, int rows,
+// Leading edge of the compression wave in one body, along the impact axis. The body's particles
+// are binned in `rows` rows of height `h` (the cell size) from `lo` along that axis; a row is
+// "reached" when its mean velocity along the axis differs from the body's initial u0 by more
+// than half of |u0| (half the particle-velocity jump of an impact that brings it to rest).
+// Scanning from the end away from the impact plane (`from_top`: the body lies above the plane),
+// the front is where the mean crosses that level, interpolated linearly between row centres.
+// Returns NaN when no row is reached, and when the first occupied row from the far end is
+// reached already: the wave has arrived there (front.csv then ends rather than follow the
+// released top or its ejecta). Needs u0 != 0.
+double front_position(const Particles& P, std::uint8_t body, double u0, double lo, double h, int rows,
                       bool from_top);
 
-// Void area left open in one body [m^2] inside the window [x0, x1] x [y0, y1] (current
-// configuration) for each window: each of the body's points covers a disk of radius `radius` sqrt(V_p) centred
-// on it, rasterized on pixels of side `pixel` over the body's bounding box; uncovered pixels
-// connected to the box's border (outside the body: above its free surface, beyond its ends)
-// are not voids; the others are, and those whose centre lies in the window count. period > 0:
-// x wraps with that period (periodic sides; the box then spans the period from xp0). A radius
+// Void area left open in one body [m^2] inside each window [lo, hi] (current configuration):
+// each of the body's points covers a disk of radius `radius` sqrt(V_p) centred on it, rasterized
+// on pixels of side about `pixel` over the body's bounding box; uncovered pixels connected to the
+// box's border (outside the body: above its free surface, beyond its ends) are not voids; the
+// others are, and those whose centre lies in the window count. period > 0: axis 0 (x) wraps with
+// that period (periodic sides; the box then spans the period from `start`). A radius
 // of 0.75 covers a square lattice, sheared or stretched by a third, without gaps: openings
 // narrower than about half the point spacing do not count (voids.csv, tests/test_porous.cpp).
 // Disks are capped at 16 pixels of radius; an image over 4e8 pixels gives NaN areas.
 // One rasterization serves every window: the result holds one area per window.
-struct Window {
-  double x0, x1, y0, y1;  // [m]
-};
+using Window = Box;
 std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
-                              double pixel, double radius, double period = 0.0, double xp0 = 0.0);
+                              double pixel, double radius, double period = 0.0, double start = 0.0);
 
 // Temperature of particle p [K] (T0 where the particle carries no energy); the stored share
 // (1 - heat_fraction) of its plastic work does not count as heat.
@@ -48,22 +49,36 @@ struct Moments {
 };
 Moments moments(const std::vector<double>& v);
 
-// The study's local velocity-gradient measures of one particle, from L = grad v [1/s]:
-// R = |curl v| = |L_yx - L_xy|, D = |div v| = |L_xx + L_yy|, S^2 = D:D (strain-rate tensor,
-// plane strain: D_zz = 0).
+// The study's local velocity-gradient measures of one particle, from the D x D gradient
+// L = grad v [1/s]: R = |curl v|, the components L_ba - L_ab (a < b) of curl v (D = 2: its one
+// component L_yx - L_xy, R its magnitude), D = |div v| = |tr L|, S^2 = D:D with D = sym(L) the
+// strain-rate tensor (plane strain at D = 2: D_zz = 0).
 struct GradientMeasures {
   double R2, D2, S2;  // [1/s^2]
   double R, D;        // |curl v|, |div v| [1/s]
 };
-inline GradientMeasures gradient_measures(double lxx, double lxy, double lyx, double lyy) {
-  const double curl = lyx - lxy, div = lxx + lyy, dxy = 0.5 * (lxy + lyx);
-  return {curl * curl, div * div, lxx * lxx + lyy * lyy + 2.0 * dxy * dxy, std::fabs(curl), std::fabs(div)};
+template <int D>
+GradientMeasures gradient_measures(const kern::Mat<D>& L) {
+  const kern::Sym<D> s = kern::sym_part(L);
+  double curl[kern::spin_size(D) > 0 ? kern::spin_size(D) : 1] = {};
+  for (int k = D; k < kern::Sym<D>::K; ++k) {
+    const int a = kern::sym_row(D, k), b = kern::sym_col(D, k);
+    curl[k - D] = L(b, a) - L(a, b);
+  }
+  double R2 = curl[0] * curl[0];
+  for (int k = 1; k < kern::spin_size(D); ++k) R2 += curl[k] * curl[k];
+  double S2 = s[0] * s[0];
+  for (int k = 1; k < D; ++k) S2 += s[k] * s[k];
+  for (int k = D; k < kern::Sym<D>::K; ++k) S2 += 2.0 * s[k] * s[k];
+  const double div = L.trace();
+  const double R = kern::spin_size(D) == 1 ? std::fabs(curl[0]) : std::sqrt(R2);
+  return {R2, div * div, S2, R, std::fabs(div)};
 }
 
-// A band across the full width, y in [y0, y1] [m], in one body.
+// A band across the full width, from lo to hi along the impact axis [m], in one body.
 struct Region {
   std::string name;
-  double y0 = 0, y1 = 0;
+  double lo = 0, hi = 0;
   std::uint8_t body = 0;
   double width = 0;  // [m] the band's width for its open porosity (0: not defined)
 };
@@ -78,7 +93,7 @@ struct RegionStats {
   // squares grow as 1/h (the jump over a width of a few cells), the means of the magnitudes do
   // not (the jump itself): docs/verification.md, porous strip.
   double R = 0, D = 0;
-  // 1 - sum V_solid / (width (y1 - y0)): the band's area the points' solid volumes leave open
+  // 1 - sum V_solid / (width (hi - lo)): the band's area the points' solid volumes leave open
   // (NaN without a width); V_solid = V_p, at most m_p / rho0 for a fractured point (its
   // expansion is crack, diagnostics.cpp); negative where points overlap
   double open = 0;

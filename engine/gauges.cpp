@@ -12,12 +12,14 @@
 
 namespace smpm {
 
-NearestPoint nearest_point(const Particles& P, double x, double y, const std::vector<bool>& in_body) {
+NearestPoint nearest_point(const Particles& P, const Vector& at, const std::vector<bool>& in_body) {
   NearestPoint best{P.size(), std::numeric_limits<double>::infinity()};
   double best2 = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (std::size_t{P.body[i]} >= in_body.size() || !in_body[P.body[i]]) continue;
-    const double dx = P.pos(0)[i] - x, dy = P.pos(1)[i] - y, d2 = dx * dx + dy * dy;
+    double e[kern::kDim];  // point - at [m]
+    for (int d = 0; d < kern::kDim; ++d) e[d] = P.pos(d)[i] - at[d];
+    const double d2 = kern::norm2(e);
     if (d2 < best2) {  // strict: the lowest index among equally near points
       best2 = d2;
       best.index = i;
@@ -28,12 +30,13 @@ NearestPoint nearest_point(const Particles& P, double x, double y, const std::ve
 }
 
 std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double spacing) {
+  const std::vector<double>& pos = P.pos(kImpactAxis);
   double top = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < P.size(); ++i)
-    if (P.body[i] == body) top = std::max(top, P.pos(1)[i]);
+    if (P.body[i] == body) top = std::max(top, pos[i]);
   std::vector<std::uint32_t> ids;
   for (std::size_t i = 0; i < P.size(); ++i)
-    if (P.body[i] == body && P.pos(1)[i] > top - 0.5 * spacing) ids.push_back(static_cast<std::uint32_t>(i));
+    if (P.body[i] == body && pos[i] > top - 0.5 * spacing) ids.push_back(static_cast<std::uint32_t>(i));
   return ids;
 }
 
@@ -92,8 +95,17 @@ std::vector<GaugeSample> PointRecorder::sample(const Simulation& sim) {
   for (const auto& g : gauges_) {
     const std::size_t i = where_[static_cast<std::size_t>(slot_[g.id])];
     const int k = sim.body_material()[P.body[i]];
-    out.push_back({P.pos(0)[i], P.pos(1)[i], P.vel(0)[i], P.vel(1)[i], P.dev(0)[i] - P.p[i], P.dev(1)[i] - P.p[i], P.dev(2)[i], P.p[i],
-                   P.m[i] / P.V[i], particle_temperature(P, i, sim.thermo()[k], sim.materials()[k])});
+    GaugeSample smp;
+    for (int d = 0; d < kern::kDim; ++d) {
+      smp.pos[d] = P.pos(d)[i];
+      smp.vel[d] = P.vel(d)[i];
+    }
+    // sigma = s - P 1: the pressure on the diagonal only
+    for (int c = 0; c < smp.sigma.K; ++c) smp.sigma[c] = c < kern::kDim ? P.dev(c)[i] - P.p[i] : P.dev(c)[i];
+    smp.P = P.p[i];
+    smp.rho = P.m[i] / P.V[i];
+    smp.T = particle_temperature(P, i, sim.thermo()[k], sim.materials()[k]);
+    out.push_back(smp);
   }
   return out;
 }
@@ -104,7 +116,7 @@ std::vector<double> PointRecorder::surface_velocity(const Simulation& sim) {
   std::vector<double> u;
   for (const auto& s : surfaces_) {
     double sum = 0.0;
-    for (const std::uint32_t id : s.ids) sum += P.vel(1)[where_[static_cast<std::size_t>(slot_[id])]];
+    for (const std::uint32_t id : s.ids) sum += P.vel(kImpactAxis)[where_[static_cast<std::size_t>(slot_[id])]];
     u.push_back(s.ids.empty() ? 0.0 : sum / double(s.ids.size()));
   }
   return u;
@@ -121,13 +133,13 @@ struct GaugeRow {
 constexpr Column<GaugeRow> kGaugeColumns[] = {
     {"time_ns", "ns", [](const GaugeRow& r) { return r.t * 1e9; }},
     {"gauge", "name", nullptr, [](const GaugeRow& r) { return r.name; }},
-    {"x_um", "um", [](const GaugeRow& r) { return r.g.x * 1e6; }},
-    {"y_um", "um", [](const GaugeRow& r) { return r.g.y * 1e6; }},
-    {"vx_m_s", "m/s", [](const GaugeRow& r) { return r.g.vx; }},
-    {"vy_m_s", "m/s", [](const GaugeRow& r) { return r.g.vy; }},
-    {"sigma_xx_GPa", "GPa", [](const GaugeRow& r) { return r.g.sxx * 1e-9; }},
-    {"sigma_yy_GPa", "GPa", [](const GaugeRow& r) { return r.g.syy * 1e-9; }},
-    {"sigma_xy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sxy * 1e-9; }},
+    {"x_um", "um", [](const GaugeRow& r) { return r.g.pos[0] * 1e6; }},
+    {"y_um", "um", [](const GaugeRow& r) { return r.g.pos[1] * 1e6; }},
+    {"vx_m_s", "m/s", [](const GaugeRow& r) { return r.g.vel[0]; }},
+    {"vy_m_s", "m/s", [](const GaugeRow& r) { return r.g.vel[1]; }},
+    {"sigma_xx_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[0] * 1e-9; }},
+    {"sigma_yy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[1] * 1e-9; }},
+    {"sigma_xy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[2] * 1e-9; }},
     {"P_GPa", "GPa", [](const GaugeRow& r) { return r.g.P * 1e-9; }},
     {"rho_g_cc", "g/cc", [](const GaugeRow& r) { return r.g.rho * 1e-3; }},
     {"T_K", "K", [](const GaugeRow& r) { return r.g.T; }},

@@ -10,7 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "engine/geometry.hpp"
 #include "engine/particles.hpp"
+#include "kernels/tensor.hpp"
 
 namespace smpm {
 
@@ -31,16 +33,16 @@ struct FreeSurface {
   std::vector<std::uint32_t> ids;  // the points of its top row (top_row), ascending
 };
 
-// The point nearest (x, y) among those of the bodies b with in_body[b], and its distance [m]; among
+// The point nearest `at` among those of the bodies b with in_body[b], and its distance [m]; among
 // equally near points the one of lowest index. index = P.size() when no point qualifies. At t = 0,
 // when index and id coincide, the index is the point's id.
 struct NearestPoint {
   std::size_t index = 0;
   double distance = 0.0;
 };
-NearestPoint nearest_point(const Particles& P, double x, double y, const std::vector<bool>& in_body);
+NearestPoint nearest_point(const Particles& P, const Vector& at, const std::vector<bool>& in_body);
 
-// The points of `body` in its top row: y within half a point spacing of the body's highest point
+// The points of `body` in its top row: along the impact axis (y) within half a point spacing of the body's highest point
 // (the surface lies half a spacing above that row, so these are the points within one spacing of
 // it), as indices in ascending order (ids at t = 0).
 std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double spacing);
@@ -50,7 +52,9 @@ std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double
 // EOS pressure P (compression positive) [Pa], density [kg/m^3], temperature [K] (T0 where the
 // material carries no energy); the snapshots' definitions (engine/run.cpp, snapshot_fields).
 struct GaugeSample {
-  double x, y, vx, vy, sxx, syy, sxy, P, rho, T;
+  Vector pos, vel;
+  kern::Sym<kern::kDim> sigma;  // components in kernels/tensor.hpp's order
+  double P, rho, T;
 };
 
 // The followed points of a run: finds them in the current particle order (one pass over the
@@ -68,7 +72,7 @@ class PointRecorder {
   // refused (CheckpointError naming the file and the record).
   void restore(const CheckpointReader& r);
   std::vector<GaugeSample> sample(const Simulation& sim);
-  // Mean y-velocity of each surface's points [m/s], summed in id order (any thread count, any
+  // Mean velocity along the impact axis (y) of each surface's points [m/s], summed in id order (any thread count, any
   // particle order: the same bits).
   std::vector<double> surface_velocity(const Simulation& sim);
   // The CSV headers (README, "Output") and the rows at the simulation's time, from the column

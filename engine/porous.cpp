@@ -11,25 +11,39 @@ namespace smpm {
 
 namespace {
 
-// The points of one body by lattice site: site[(b - b0) na + (a - a0)] is the index of the point
-// at site (a, b), centre (ox + (a + 1/2) d, oy + (b + 1/2) d), or -1 for none.
+constexpr int kDim = kern::kDim;
+
+// The points of one body by lattice site: site[at(i)] is the index of the point at lattice site
+// i (one index per axis), centre origin + (i + 1/2) step, or -1 for none; the sites from `first`,
+// n[d] along axis d.
 struct SiteIndex {
-  long a0 = 0, b0 = 0, na = 0, nb = 0;
+  Index first{}, n{};
   std::vector<std::int64_t> site;
+  std::size_t at(const Index& i) const {
+    Index r;
+    for (int d = 0; d < kDim; ++d) r[d] = i[d] - first[d];
+    return static_cast<std::size_t>(linear_index(r, n));
+  }
 };
 
-SiteIndex index_sites(const Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1) {
+SiteIndex index_sites(const Particles& P, double step, const Vector& origin, const Box& box) {
   SiteIndex S;
-  S.a0 = static_cast<long>(std::floor((x0 - ox) / d));
-  S.b0 = static_cast<long>(std::floor((y0 - oy) / d));
-  S.na = static_cast<long>(std::ceil((x1 - ox) / d)) - S.a0 + 1;
-  S.nb = static_cast<long>(std::ceil((y1 - oy) / d)) - S.b0 + 1;
-  S.site.assign(static_cast<std::size_t>(S.na * S.nb), -1);
+  long sites = 1;
+  for (int d = 0; d < kDim; ++d) {
+    S.first[d] = static_cast<long>(std::floor((box.lo[d] - origin[d]) / step));
+    S.n[d] = static_cast<long>(std::ceil((box.hi[d] - origin[d]) / step)) - S.first[d] + 1;
+    sites *= S.n[d];
+  }
+  S.site.assign(static_cast<std::size_t>(sites), -1);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const long a = static_cast<long>(std::floor((P.pos(0)[i] - ox) / d)) - S.a0;
-    const long b = static_cast<long>(std::floor((P.pos(1)[i] - oy) / d)) - S.b0;
-    if (a < 0 || a >= S.na || b < 0 || b >= S.nb) throw std::logic_error("cut_voids: point outside the body rectangle");
-    S.site[static_cast<std::size_t>(b * S.na + a)] = static_cast<std::int64_t>(i);
+    Index a;
+    bool out = false;
+    for (int d = 0; d < kDim; ++d) {
+      a[d] = static_cast<long>(std::floor((P.pos(d)[i] - origin[d]) / step));
+      out = out || a[d] < S.first[d] || a[d] >= S.first[d] + S.n[d];
+    }
+    if (out) throw std::logic_error("cut_voids: point outside the body rectangle");
+    S.site[S.at(a)] = static_cast<std::int64_t>(i);
   }
   return S;
 }
@@ -40,19 +54,28 @@ struct Removal {
   std::size_t count = 0;
 };
 
-// Removes the points within the void v: the void's rows within the body, and in each row its
-// columns within the body (or within one period of pa lattice steps, pa > 0: x wraps), so that
-// a void far larger than the body costs no more than the body.
-void remove_in_void(const SiteIndex& S, double d, double ox, double oy, long pa, const Void& v, Removal& R) {
-  const double cx = v.x, cy = v.y, rad = v.r;
-  const long a0 = S.a0, b0 = S.b0, na = S.na, nb = S.nb;
-  const double cb0 = std::floor((cy - rad - oy) / d), cb1 = std::floor((cy + rad - oy) / d);
-  const long bl = static_cast<long>(std::max(cb0, double(b0))), bh = static_cast<long>(std::min(cb1, double(b0 + nb - 1)));
-  for (long b = bl; b <= bh; ++b) {
-    const double py = oy + (b + 0.5) * d;
-    const double half = std::sqrt(std::max(0.0, rad * rad - (py - cy) * (py - cy)));
-    double ca0 = std::floor((cx - half - ox) / d), ca1 = std::floor((cx + half - ox) / d);
-    const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * d;  // the chord spans the period
+// Removes the points within the void v: the void's rows along axis 0 (x) within the body, and in
+// each row its sites within the body (or within one period of pa lattice steps, pa > 0: axis 0
+// wraps), so that a void far larger than the body costs no more than the body.
+void remove_in_void(const SiteIndex& S, double step, const Vector& origin, long pa, const Void& v, Removal& R) {
+  const double rad = v.r;
+  const long a0 = S.first[0], na = S.n[0];
+  Index first{}, last{};  // the rows: lattice indices of the other axes, axis 0 left at 0
+  for (int d = 1; d < kDim; ++d) {
+    const double c0 = std::floor((v.c[d] - rad - origin[d]) / step), c1 = std::floor((v.c[d] + rad - origin[d]) / step);
+    first[d] = static_cast<long>(std::max(c0, double(S.first[d])));
+    last[d] = static_cast<long>(std::min(c1, double(S.first[d] + S.n[d] - 1)));
+  }
+  for_each_index(first, last, [&](const Index& row) {
+    double e[kDim] = {};  // site - centre [m]; e[0] per site
+    double across = 0.0;  // squared distance of the row from the centre [m^2]
+    for (int d = 1; d < kDim; ++d) {
+      e[d] = origin[d] + (row[d] + 0.5) * step - v.c[d];
+      across = d == 1 ? e[d] * e[d] : across + e[d] * e[d];
+    }
+    const double half = std::sqrt(std::max(0.0, rad * rad - across));
+    double ca0 = std::floor((v.c[0] - half - origin[0]) / step), ca1 = std::floor((v.c[0] + half - origin[0]) / step);
+    const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * step;  // the chord spans the period
     if (whole_row) {
       ca0 = double(a0);
       ca1 = double(a0 + pa - 1);
@@ -61,18 +84,19 @@ void remove_in_void(const SiteIndex& S, double d, double ox, double oy, long pa,
       ca1 = std::min(ca1, double(a0 + na - 1));
     }
     for (long a = static_cast<long>(ca0); a <= static_cast<long>(ca1); ++a) {
-      const double px = ox + (a + 0.5) * d;
-      if (!whole_row && (px - cx) * (px - cx) + (py - cy) * (py - cy) >= rad * rad) continue;
-      long aa = a;
-      if (pa > 0) aa = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
-      if (aa < a0 || aa >= a0 + na) continue;
-      const std::int64_t i = S.site[static_cast<std::size_t>((b - b0) * na + (aa - a0))];
+      e[0] = origin[0] + (a + 0.5) * step - v.c[0];
+      if (!whole_row && kern::norm2(e) >= rad * rad) continue;
+      Index site = row;
+      site[0] = a;
+      if (pa > 0) site[0] = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
+      if (site[0] < a0 || site[0] >= a0 + na) continue;
+      const std::int64_t i = S.site[S.at(site)];
       if (i >= 0 && !R.removed[static_cast<std::size_t>(i)]) {
         R.removed[static_cast<std::size_t>(i)] = 1;
         ++R.count;
       }
     }
-  }
+  });
 }
 
 // The points of P not removed, in their order.
@@ -82,7 +106,10 @@ Particles keep_unremoved(const Particles& P, const Removal& R) {
   std::size_t k = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (R.removed[i]) continue;
-    Q.pos(0)[k] = P.pos(0)[i]; Q.pos(1)[k] = P.pos(1)[i]; Q.vel(0)[k] = P.vel(0)[i]; Q.vel(1)[k] = P.vel(1)[i];
+    for (int d = 0; d < kDim; ++d) {
+      Q.pos(d)[k] = P.pos(d)[i];
+      Q.vel(d)[k] = P.vel(d)[i];
+    }
     Q.m[k] = P.m[i]; Q.V[k] = P.V[i]; Q.body[k] = P.body[i];
     ++k;
   }
@@ -91,8 +118,8 @@ Particles keep_unremoved(const Particles& P, const Removal& R) {
 
 }  // namespace
 
-PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1,
-                       const VoidSpec& spec, double period) {
+PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Box& box, const VoidSpec& spec,
+                       double period) {
   const bool listed = !spec.centers.empty();
   if (!listed && spec.radius <= 0.0) throw std::invalid_argument("void radius must be positive");
   if (!listed && (spec.radius_spread < 0.0 || spec.radius_spread >= spec.radius))
@@ -100,13 +127,14 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
   if (!listed && (spec.porosity < 0.0) == (spec.count < 0))
     throw std::invalid_argument("give either a target porosity or a void count");
   const std::size_t n = P.size();
-  const SiteIndex S = index_sites(P, d, ox, oy, x0, x1, y0, y1);
+  const SiteIndex S = index_sites(P, step, origin, box);
   Removal R;
   R.removed.assign(n, 0);
   std::mt19937_64 rng(spec.seed);
-  std::uniform_real_distribution<double> ux(x0, x1), uy(y0, y1), ur(spec.radius - spec.radius_spread,
-                                                                     spec.radius + spec.radius_spread);
-  const long pa = period > 0.0 ? std::lround(period / d) : 0;  // period in lattice steps
+  std::vector<std::uniform_real_distribution<double>> uc;  // centres, per axis
+  for (int d = 0; d < kDim; ++d) uc.emplace_back(box.lo[d], box.hi[d]);
+  std::uniform_real_distribution<double> ur(spec.radius - spec.radius_spread, spec.radius + spec.radius_spread);
+  const long pa = period > 0.0 ? std::lround(period / step) : 0;  // period in lattice steps
   PorousResult r;
   const long max_voids = listed ? static_cast<long>(spec.centers.size())
                                 : std::min(spec.count >= 0 ? spec.count : spec.max_voids, spec.max_voids);
@@ -117,22 +145,23 @@ PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, 
     if (listed) {
       v = spec.centers[static_cast<std::size_t>(r.voids)];
     } else {
-      v.x = ux(rng); v.y = uy(rng); v.r = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
+      for (int d = 0; d < kDim; ++d) v.c[d] = uc[d](rng);
+      v.r = spec.radius_spread > 0.0 ? ur(rng) : spec.radius;
     }
     ++r.voids;
     r.cut.push_back(v);
-    remove_in_void(S, d, ox, oy, pa, v, R);
+    remove_in_void(S, step, origin, pa, v, R);
   }
   r.porosity = n ? static_cast<double>(R.count) / static_cast<double>(n) : 0.0;
   P = keep_unremoved(P, R);
   return r;
 }
 
-Particles mirror_y(const Particles& P, double y_plane) {
+Particles mirror(const Particles& P, int axis, double plane) {
   Particles Q = P;
   for (std::size_t i = 0; i < Q.size(); ++i) {
-    Q.pos(1)[i] = 2.0 * y_plane - P.pos(1)[i];
-    Q.vel(1)[i] = -P.vel(1)[i];
+    Q.pos(axis)[i] = 2.0 * plane - P.pos(axis)[i];
+    Q.vel(axis)[i] = -P.vel(axis)[i];
   }
   return Q;
 }
@@ -141,66 +170,121 @@ Particles mirror_y(const Particles& P, double y_plane) {
 
 namespace smpm {
 
-void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
-                       double period, int nfields) {
+namespace {
+
+// Voids binned into buckets: n[d] along axis d, of size size[d] from lo[d] (the voids' lowest
+// centre); wrap[d]: axis d is periodic with `period` and its buckets tile the period.
+struct VoidBuckets {
+  Vector lo, size;
+  Index n;
+  bool wrap[kDim];
+  double period;
+  std::vector<std::vector<std::uint32_t>> voids;  // void indices per bucket, axis 0 fastest
+  // the bucket index along axis d of coordinate q
+  long along(int d, double q) const {
+    const double u = wrap[d] ? q - lo[d] - period * std::floor((q - lo[d]) / period) : q - lo[d];
+    const long b = static_cast<long>(std::floor(u / size[d]));
+    return wrap[d] ? std::min(b, n[d] - 1) : b;
+  }
+};
+
+// Square buckets of side B >= r_max + reach (a period's whole number of them along a periodic
+// axis 0): a point's candidates lie in its own bucket and its neighbours.
+VoidBuckets bucket_voids(const std::vector<Void>& voids, double reach, double period) {
+  double rmax = 0.0;
+  Vector hi;  // the highest centre [m]
+  VoidBuckets K;
+  for (int d = 0; d < kDim; ++d) {
+    K.lo[d] = 1e300;
+    hi[d] = -1e300;
+  }
+  for (const Void& v : voids) {
+    rmax = std::max(rmax, v.r);
+    for (int d = 0; d < kDim; ++d) {
+      K.lo[d] = std::min(K.lo[d], v.c[d]);
+      hi[d] = std::max(hi[d], v.c[d]);
+    }
+  }
+  const double B = rmax + reach;
+  K.period = period;
+  long buckets = 1;
+  for (int d = 0; d < kDim; ++d) {
+    K.wrap[d] = d == 0 && period > 0.0;
+    K.n[d] = K.wrap[d] ? std::max(1L, static_cast<long>(period / B)) : static_cast<long>((hi[d] - K.lo[d]) / B) + 1;
+    K.size[d] = K.wrap[d] ? period / static_cast<double>(K.n[d]) : B;
+    buckets *= K.n[d];
+  }
+  K.voids.resize(static_cast<std::size_t>(buckets));
+  for (std::size_t k = 0; k < voids.size(); ++k) {
+    Index b;
+    for (int d = 0; d < kDim; ++d) b[d] = K.along(d, voids[k].c[d]);
+    K.voids[static_cast<std::size_t>(linear_index(b, K.n))].push_back(static_cast<std::uint32_t>(k));
+  }
+  return K;
+}
+
+// a . b over the axes, summed in axis order
+double dot(const double* a, const Vector& b) {
+  double s = a[0] * b[0];
+  for (int d = 1; d < kDim; ++d) s += a[d] * b[d];
+  return s;
+}
+
+}  // namespace
+
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach, double period,
+                       int nfields) {
   if (nfields != 2 && nfields != 4)
     throw std::invalid_argument("assign_void_sides: nfields must be 2 or 4, got " + std::to_string(nfields));
   const bool across = nfields == 4;
   const std::size_t n = P.size();
   P.field.assign(n, 0);
   if (voids.empty() || n == 0) return;
-  // voids binned into square buckets of side B >= r_max + reach: a point's candidates lie in
-  // its own and the 8 neighbouring buckets
-  double rmax = 0.0, xmin = 1e300, ymin = 1e300, xmax = -1e300, ymax = -1e300;  // [m]
-  for (const Void& v : voids) {
-    rmax = std::max(rmax, v.r);
-    xmin = std::min(xmin, v.x); xmax = std::max(xmax, v.x);
-    ymin = std::min(ymin, v.y); ymax = std::max(ymax, v.y);
-  }
-  const double B = rmax + reach;
-  // periodic x: the buckets tile the period (origin xmin) and their neighbours wrap
-  const bool wrap = period > 0.0;
-  const long nbx = wrap ? std::max(1L, static_cast<long>(period / B)) : static_cast<long>((xmax - xmin) / B) + 1;
-  const double Bx = wrap ? period / static_cast<double>(nbx) : B;
-  const long nby = static_cast<long>((ymax - ymin) / B) + 1;
-  auto column = [&](double x) {
-    const double u = wrap ? x - xmin - period * std::floor((x - xmin) / period) : x - xmin;
-    return std::min(static_cast<long>(std::floor(u / Bx)), wrap ? nbx - 1 : std::numeric_limits<long>::max());
-  };
-  std::vector<std::vector<std::uint32_t>> bucket(static_cast<std::size_t>(nbx * nby));
-  for (std::size_t k = 0; k < voids.size(); ++k) {
-    const long bx = column(voids[k].x), by = static_cast<long>((voids[k].y - ymin) / B);
-    bucket[static_cast<std::size_t>(by * nbx + bx)].push_back(static_cast<std::uint32_t>(k));
+  const VoidBuckets K = bucket_voids(voids, reach, period);
+  Vector t{};  // the direction across s: s turned by -90 degrees in the plane of axes 0 and 1
+  t[0] = s[1];
+  t[1] = -s[0];
+  Index lo, hi;  // neighbour offsets
+  for (int d = 0; d < kDim; ++d) {
+    lo[d] = -1;
+    hi[d] = 1;
   }
 #pragma omp parallel for schedule(static)
   for (std::size_t p = 0; p < n; ++p) {
-    const double x = P.pos(0)[p], y = P.pos(1)[p];
-    const long by = static_cast<long>(std::floor((y - ymin) / B)), bx = column(x);
+    double x[kDim];
+    Index home;
+    for (int d = 0; d < kDim; ++d) {
+      x[d] = P.pos(d)[p];
+      home[d] = K.along(d, x[d]);
+    }
     double best = reach;
-    double side = 0.0, lat = 0.0;  // (x - c) . s and (x - c) x s of the nearest void
-    for (long j = std::max(by - 1, 0L); j <= std::min(by + 1, nby - 1); ++j) {
-      for (long di = -1; di <= 1; ++di) {
-        long i = bx + di;
-        if (wrap) {
-          if (nbx < 3 && di != 0 && (nbx == 1 || di == 1)) continue;  // each column once
-          i = (i + nbx) % nbx;
-        } else if (i < 0 || i >= nbx) {
-          continue;
-        }
-        for (std::uint32_t k : bucket[static_cast<std::size_t>(j * nbx + i)]) {
-          const Void& v = voids[k];
-          double dx = x - v.x;
-          if (wrap) dx -= period * std::round(dx / period);
-          const double dy = y - v.y;
-          const double d = std::sqrt(dx * dx + dy * dy) - v.r;
-          if (d < best) {
-            best = d;
-            side = dx * sx + dy * sy;
-            lat = dx * sy - dy * sx;
-          }
+    double side = 0.0, lat = 0.0;  // (x - c) . s and (x - c) . t of the nearest void
+    for_each_index(lo, hi, [&](const Index& off) {
+      Index b;
+      for (int d = 0; d < kDim; ++d) {
+        b[d] = home[d] + off[d];
+        if (K.wrap[d]) {
+          if (K.n[d] < 3 && off[d] != 0 && (K.n[d] == 1 || off[d] == 1)) return;  // each bucket once
+          b[d] = (b[d] + K.n[d]) % K.n[d];
+        } else if (b[d] < 0 || b[d] >= K.n[d]) {
+          return;
         }
       }
-    }
+      for (std::uint32_t k : K.voids[static_cast<std::size_t>(linear_index(b, K.n))]) {
+        const Void& v = voids[k];
+        double e[kDim];  // x - c [m]
+        for (int d = 0; d < kDim; ++d) {
+          e[d] = x[d] - v.c[d];
+          if (K.wrap[d]) e[d] -= period * std::round(e[d] / period);
+        }
+        const double dist = std::sqrt(kern::norm2(e)) - v.r;
+        if (dist < best) {
+          best = dist;
+          side = dot(e, s);
+          lat = dot(e, t);
+        }
+      }
+    });
     P.field[p] = static_cast<std::uint8_t>((side > 0.0 ? 1 : 0) + (across && lat > 0.0 ? 2 : 0));
   }
 }

@@ -6,12 +6,14 @@
 #include <cstdint>
 #include <vector>
 
+#include "engine/geometry.hpp"
 #include "engine/particles.hpp"
 
 namespace smpm {
 
 struct Void {
-  double x = 0, y = 0, r = 0;  // centre and radius [m]
+  Vector c{};    // centre [m]
+  double r = 0;  // radius [m]
 };
 
 struct VoidSpec {
@@ -30,26 +32,28 @@ struct PorousResult {
   std::vector<Void> cut;  // the voids, in the order drawn
 };
 
-// Cuts voids from the points of P: one body on the lattice of spacing d whose points sit at
-// (ox + (a + 1/2) d, oy + (b + 1/2) d), inside [x0, x1) x [y0, y1). With `period` > 0 distances
-// in x wrap with that period (periodic sides), so voids cross the side boundaries. P is
-// compacted in place, keeping the order of the rest.
-PorousResult cut_voids(Particles& P, double d, double ox, double oy, double x0, double x1, double y0, double y1,
-                       const VoidSpec& spec, double period);
+// Cuts voids from the points of P: one body on the lattice of spacing `step` whose points sit at
+// origin + (i + 1/2) step (i a lattice index per axis), inside the half-open box [lo, hi). With
+// `period` > 0 distances along axis 0 (x) wrap with that period (periodic sides), so voids cross
+// the side boundaries. P is compacted in place, keeping the order of the rest.
+PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Box& box, const VoidSpec& spec,
+                       double period);
 
-// Mirror image of P about the line y = y_plane (for the symmetric two-body collision).
-Particles mirror_y(const Particles& P, double y_plane);
+// Mirror image of P about the plane where axis `axis` is `plane` [m] (for the symmetric two-body
+// collision): positions and velocities along that axis reflected.
+Particles mirror(const Particles& P, int axis, double plane);
 
 // Separated void faces: puts each point of P in velocity field 0 or 1 by the side of its
-// nearest void (nearest surface, |x - c| - r) it lies on along the unit direction (sx, sy)
-// (the impact direction): 1 where (x - c) . s > 0. The two faces of a void that a shock
-// closes along s then lie in different fields, which approach each other freely until they
-// meet (kern::grid_contact, weld). Points with no void within `reach` [m] of their surface
-// take field 0. period > 0: distances in x wrap. nfields = 4 splits each side again across s:
-// field + 2 where (x - c) x s = (x - c)_x s_y - (x - c)_y s_x > 0, so that the faces of a void
-// that close across s (a void a few cells wide collapses from all sides) lie in different fields
-// too. Sets P.field (0 .. nfields - 1).
-void assign_void_sides(Particles& P, const std::vector<Void>& voids, double sx, double sy, double reach,
-                       double period, int nfields = 2);
+// nearest void (nearest surface, |x - c| - r) it lies on along the unit direction s (the impact
+// direction): 1 where (x - c) . s > 0. The two faces of a void that a shock closes along s then
+// lie in different fields, which approach each other freely until they meet (kern::grid_contact,
+// weld). Points with no void within `reach` [m] of their surface take field 0. period > 0:
+// distances along axis 0 (x) wrap. nfields = 4 splits each side again across s: field + 2 where
+// (x - c) . t > 0, t = (s_y, -s_x) (s turned by -90 degrees in the plane of axes 0 and 1:
+// (x - c) . t is the cross product (x - c) x s at D = 2), so that the faces of a void that close
+// across s (a void a few cells wide collapses from all sides) lie in different fields too. Sets
+// P.field (0 .. nfields - 1).
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach, double period,
+                       int nfields = 2);
 
 }  // namespace smpm

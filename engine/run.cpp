@@ -252,10 +252,10 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
 toml::table body_json(const Scene& scene, std::size_t k) {
   const auto& b = scene.bodies[k];
   toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
-                 {"area_m2", b.area}, {"velocity_m_s", toml::array{b.vx0, b.vy0}}, {"porosity", b.porosity},
+                 {"area_m2", b.area}, {"velocity_m_s", toml::array{b.velocity[0], b.velocity[1]}}, {"porosity", b.porosity},
                  {"voids", static_cast<int64_t>(b.voids)}};
   const Material& m = scene.materials[scene.body_material[k]];
-  const double up = std::hypot(b.vx0, b.vy0);
+  const double up = std::hypot(b.velocity[0], b.velocity[1]);
   if (m.eos != EosKind::MieGruneisen || up <= 0.0) return bt;
   // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
   const auto h = hugoniot(m, up);
@@ -332,7 +332,7 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   t.insert("bodies", std::move(bodies));
   toml::array regions;  // the regions of series.csv, in its order
   for (const auto& r : scene.regions)
-    regions.push_back(toml::table{{"name", r.name}, {"y_range_um", toml::array{r.y0 * 1e6, r.y1 * 1e6}},
+    regions.push_back(toml::table{{"name", r.name}, {"y_range_um", toml::array{r.lo * 1e6, r.hi * 1e6}},
                                   {"body", static_cast<int64_t>(r.body)}});
   t.insert("regions", std::move(regions));
   t.insert("case_resolved", scene.resolved);
@@ -379,7 +379,7 @@ std::string describe_scene(const Scene& sc) {
   for (std::size_t k = 0; k < sc.bodies.size(); ++k) {
     const auto& b = sc.bodies[k];
     const Material& m = sc.materials[sc.body_material[k]];
-    const double up = std::hypot(b.vx0, b.vy0);
+    const double up = std::hypot(b.velocity[0], b.velocity[1]);
     if (m.eos != EosKind::MieGruneisen || up <= 0.0) continue;
     const auto h = hugoniot(m, up);
     if (!h.in_range) {
@@ -521,7 +521,7 @@ class RunOutputs {
 RunOutputs::RunOutputs(const Scene& scene, const Simulation& sim, const std::filesystem::path& out, RunSummary& s,
                        const CheckpointReader* resume)
     : scene_(scene), sim_(sim), out_(out), s_(s), snaps_(out / "fields"), target_(scene.target),
-      vy0_(scene.bodies[scene.target].vy0), table_(std::size(kSeriesColumns)),
+      vy0_(scene.bodies[scene.target].velocity[kImpactAxis]), table_(std::size(kSeriesColumns)),
       points_(scene.gauges, scene.free_surfaces, sim.particles().size()) {
   if (resume) snaps_.adopt(resume->text("run/snapshots"));
   // voids.csv: the void area left open in the target (and its share of each region's band), at
@@ -618,14 +618,14 @@ void RunOutputs::write_voids() {
   const double pixel = std::sqrt(body.area / double(body.particles)) / 3;  // [m]
   const double period = g.wrap[0] ? g.length(0) : 0.0, x1 = g.lo[0] + g.length(0);
   const auto b = static_cast<std::uint8_t>(target_);
-  std::vector<Window> win{{g.lo[0], x1, -1e300, 1e300}};
-  for (const auto& r : scene_.regions) win.push_back({g.lo[0], x1, r.y0, r.y1});
+  std::vector<Window> win{Window{{g.lo[0], -1e300}, {x1, 1e300}}};
+  for (const auto& r : scene_.regions) win.push_back(Window{{g.lo[0], r.lo}, {x1, r.hi}});
   const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.lo[0]);
   voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
   for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
     const auto& r = scene_.regions[k];
     if (r.body != b) continue;
-    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.y1 - r.y0) * g.length(0))});
+    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.hi - r.lo) * g.length(0))});
   }
   voids_.flush();
 }

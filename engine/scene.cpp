@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -92,63 +91,71 @@ std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem
                   "set the top-level key 'materials_file'");
 }
 
-using Point = std::array<double, kDim>;  // a position [m]
-
-// An axis-aligned box [lo, hi] [m].
-struct Box {
-  Point lo{}, hi{};
-};
-
-// A body's bounding box (BodyInfo keeps it as x0, x1, y0, y1).
-Box body_box(const BodyInfo& b) { return {{b.x0, b.y0}, {b.x1, b.y1}}; }
-void set_body_box(BodyInfo& b, const Box& box) {
-  b.x0 = box.lo[0]; b.x1 = box.hi[0]; b.y0 = box.lo[1]; b.y1 = box.hi[1];
-}
-
 // A per-axis case key: axis_key(1, "_range") = "y_range".
 std::string axis_key(int a, const char* suffix) { return std::string(kern::kAxisNames[a]) + suffix; }
 
+// A case key holding one value per axis (e.g. velocity_m_s = [0.0, -800.0]) [SI], read as a pair
+// (the axes of D = 2); `def`: its default (none: the key is required).
+Vector read_vector(CaseReader& r, const std::string& key, const Quantity& q,
+                   const std::optional<Vector>& def = std::nullopt) {
+  Vector v;
+  std::tie(v[0], v[1]) = def ? r.pair(key, q, false, {(*def)[0], (*def)[1]}) : r.pair(key, q, false);
+  return v;
+}
+
+// The values of v joined by ", ", each as `format` writes it: "1.5, 2".
+template <class Format>
+std::string join_axes(const Vector& v, Format format) {
+  std::string s;
+  for (int a = 0; a < kDim; ++a) s += (a ? ", " : "") + format(v[a]);
+  return s;
+}
+
 // Whether p lies in the half-open box [lo, hi).
-bool in_half_open(const Box& b, const Point& p) {
+bool in_half_open(const Box& b, const Vector& p) {
   for (int a = 0; a < kDim; ++a)
     if (!(p[a] >= b.lo[a] && p[a] < b.hi[a])) return false;
   return true;
 }
 
-// Lattice of sub-cell centres: point (a, b) at (x0 + (a + 0.5) d, y0 + (b + 0.5) d), d = h / ppc,
-// over the sites near `box`; a site holds a point where inside(its centre) is true.
+// Lattice of sub-cell centres: the point of lattice index i at lo + (i + 0.5) d per axis (lo the
+// grid's origin, d = h / ppc), over the sites near `box`; a site holds a point where inside(its
+// centre) is true. The points move at velocity v.
 template <class Inside>
-Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double rho0, double vx, double vy,
+Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double rho0, const Vector& v,
                        std::uint8_t body, Inside inside) {
   Particles P;
   const double d = g.h / ppc;
-  std::array<long, kDim> first{}, last{};  // lattice indices per axis
+  Index first{}, last{};  // lattice indices per axis
+  double vol = d, mass = rho0 * d;  // a point's volume d^D and mass
   for (int a = 0; a < kDim; ++a) {
     const double o = g.lo[a];
     first[a] = std::max(0L, static_cast<long>(std::floor((box.lo[a] - o) / d - 0.5)));
     last[a] = std::min(static_cast<long>(g.n[a]) * ppc - 1, static_cast<long>(std::ceil((box.hi[a] - o) / d)));
+    if (a) {
+      vol *= d;
+      mass *= d;
+    }
   }
   std::size_t n = 0;
   for (int pass = 0; pass < 2; ++pass) {
     if (pass == 1) P.resize(n);
     std::size_t k = 0;
-    for (long b = first[1]; b <= last[1]; ++b) {
-      const double y = g.lo[1] + (b + 0.5) * d;
-      for (long a = first[0]; a <= last[0]; ++a) {
-        const double x = g.lo[0] + (a + 0.5) * d;
-        if (!inside(Point{x, y})) continue;
-        if (pass == 1) {
-          P.pos(0)[k] = x;
-          P.pos(1)[k] = y;
-          P.vel(0)[k] = vx;
-          P.vel(1)[k] = vy;
-          P.V[k] = d * d;
-          P.m[k] = rho0 * d * d;
-          P.body[k] = body;
+    for_each_index(first, last, [&](const Index& i) {
+      Vector c;  // the site's centre [m]
+      for (int a = 0; a < kDim; ++a) c[a] = g.lo[a] + (i[a] + 0.5) * d;
+      if (!inside(c)) return;
+      if (pass == 1) {
+        for (int a = 0; a < kDim; ++a) {
+          P.pos(a)[k] = c[a];
+          P.vel(a)[k] = v[a];
         }
-        ++k;
+        P.V[k] = vol;
+        P.m[k] = mass;
+        P.body[k] = body;
       }
-    }
+      ++k;
+    });
     n = k;
   }
   return P;
@@ -159,7 +166,7 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double 
 // A body's shape as read from its keys [m]: a rectangle's box, a disk's centre and radius.
 struct ShapeParams {
   Box box;
-  Point centre{};
+  Vector centre{};
   double radius = 0.0;
 };
 
@@ -170,9 +177,9 @@ struct BodyShape {
   const char* name;
   ShapeParams (*read)(CaseReader& r);
   std::vector<std::string> size_keys;  // the keys that set its size, named when it needs too much memory
-  bool (*inside)(const ShapeParams& s, const Point& p);
+  bool (*inside)(const ShapeParams& s, const Vector& p);
   Box (*bbox)(const ShapeParams& s);
-  bool (*outline)(const Box& box, const Point& p);
+  bool (*outline)(const Box& box, const Vector& p);
 };
 
 ShapeParams read_rectangle(CaseReader& r) {
@@ -180,21 +187,24 @@ ShapeParams read_rectangle(CaseReader& r) {
   for (int a = 0; a < kDim; ++a) std::tie(s.box.lo[a], s.box.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
   return s;
 }
-bool rectangle_inside(const ShapeParams& s, const Point& p) { return in_half_open(s.box, p); }
+bool rectangle_inside(const ShapeParams& s, const Vector& p) { return in_half_open(s.box, p); }
 Box rectangle_bbox(const ShapeParams& s) { return s.box; }
-bool rectangle_outline(const Box& b, const Point& p) {
-  for (int a = 0; a < kDim; ++a)
-    if (!(p[a] >= b.lo[a] && p[a] <= b.hi[a])) return false;
-  return true;
+bool rectangle_outline(const Box& b, const Vector& p) { return in_box(b, p); }
+
+// The keys of a rectangle's size: x_range, y_range, ...
+std::vector<std::string> range_keys() {
+  std::vector<std::string> keys;
+  for (int a = 0; a < kDim; ++a) keys.push_back(axis_key(a, "_range"));
+  return keys;
 }
 
 ShapeParams read_disk(CaseReader& r) {
   ShapeParams s;
-  std::tie(s.centre[0], s.centre[1]) = r.pair("center", kLength, false);
+  s.centre = read_vector(r, "center", kLength);
   s.radius = r.quantity("radius", kLength, 0.0, kInf);
   return s;
 }
-bool disk_inside(const ShapeParams& s, const Point& p) {
+bool disk_inside(const ShapeParams& s, const Vector& p) {
   double q = 0.0;  // squared distance from the centre [m^2]
   for (int a = 0; a < kDim; ++a) q += (p[a] - s.centre[a]) * (p[a] - s.centre[a]);
   return q < s.radius * s.radius;
@@ -207,15 +217,16 @@ Box disk_bbox(const ShapeParams& s) {
   }
   return b;
 }
-// The disk inscribed in the box: radius half its width, centred on the box.
-bool disk_outline(const Box& b, const Point& p) {
-  const double r = 0.5 * (b.hi[0] - b.lo[0]), dx = p[0] - (b.lo[0] + r), dy = p[1] - 0.5 * (b.lo[1] + b.hi[1]);
-  return dx * dx + dy * dy <= r * r;
+// The disk inscribed in the box: radius half its extent along axis 0, centred on the box.
+bool disk_outline(const Box& b, const Vector& p) {
+  const double r = 0.5 * (b.hi[0] - b.lo[0]);
+  double e[kDim];  // p - centre [m]
+  for (int a = 0; a < kDim; ++a) e[a] = p[a] - (a == 0 ? b.lo[0] + r : 0.5 * (b.lo[a] + b.hi[a]));
+  return kern::norm2(e) <= r * r;
 }
 
 const BodyShape kShapes[] = {
-    {"rectangle", read_rectangle, {axis_key(0, "_range"), axis_key(1, "_range")}, rectangle_inside, rectangle_bbox,
-     rectangle_outline},
+    {"rectangle", read_rectangle, range_keys(), rectangle_inside, rectangle_bbox, rectangle_outline},
     {"disk", read_disk, {"radius"}, disk_inside, disk_bbox, disk_outline},
 };
 
@@ -232,7 +243,7 @@ const BodyShape& find_shape(const std::string& name) {
 }
 
 // Whether p lies within a body's outline (its shape's, voids included).
-bool in_outline(const BodyInfo& b, const Point& p) { return find_shape(b.shape).outline(body_box(b), p); }
+bool in_outline(const BodyInfo& b, const Vector& p) { return find_shape(b.shape).outline(b.box, p); }
 
 // ---- Case sections ----
 
@@ -269,7 +280,7 @@ void read_grid(CaseReader& top, Scene& s) {
   Box range;
   for (int a = 0; a < kDim; ++a) std::tie(range.lo[a], range.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
   s.geom.h = h;
-  Point f{};  // cells along each axis, as read
+  Vector f{};  // cells along each axis, as read
   double cells = 1.0;
   bool too_many = false;
   std::string keys = "case keys 'grid.cell_size'", counts;
@@ -323,9 +334,8 @@ void read_solver(CaseReader& top, Scene& s) {
   s.solver.av_quadratic = r.number("viscosity_quadratic", 0.0, 10.0, 1.5);
   s.solver.heat_conduction = r.boolean("heat_conduction", false);
   s.solver.crack_closure = r.boolean("crack_closure", true);
-  const auto [gx, gy] = r.pair("gravity", kAcceleration, false, {0.0, 0.0});
-  s.solver.gravity[0] = gx;
-  s.solver.gravity[1] = gy;
+  const Vector gravity = read_vector(r, "gravity", kAcceleration, Vector{});
+  for (int a = 0; a < kDim; ++a) s.solver.gravity[a] = gravity[a];
   r.finish();
 }
 
@@ -512,36 +522,43 @@ long mirror_source(CaseReader& r, const Scene& s, const BodyInfo& info) {
   return src;
 }
 
-// A mirror copy of the earlier body `src` about y = mirror_plane_y (default: its lower edge): its
-// points (positions, masses, volumes), bounding box, shape and voids reflected.
-Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8_t b, double vx, double vy,
+// A mirror copy of the earlier body `src` about the plane where the impact axis is
+// mirror_plane_y (default: its lower edge): its points (positions, masses, volumes), bounding
+// box, shape and voids reflected. Its points move at velocity v.
+Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8_t b, const Vector& v,
                       BodyInfo& info, Box& box) {
+  constexpr int A = kImpactAxis;
   const BodyInfo& sb = s.bodies[src];
-  const double plane = r.quantity("mirror_plane_y", kLength, -kInf, kInf, sb.y0);
+  const double plane = r.quantity("mirror_plane_y", kLength, -kInf, kInf, sb.box.lo[A]);
   Particles S;
   std::size_t first = 0;
   for (std::size_t k = 0; k < src; ++k) first += s.bodies[k].particles;
   S.resize(sb.particles);
   for (std::size_t i = 0; i < sb.particles; ++i) {
     const std::size_t j = first + i;
-    S.pos(0)[i] = s.particles.pos(0)[j]; S.pos(1)[i] = s.particles.pos(1)[j]; S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
+    for (int a = 0; a < kDim; ++a) S.pos(a)[i] = s.particles.pos(a)[j];
+    S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
   }
-  Particles P = mirror_y(S, plane);
+  Particles P = mirror(S, A, plane);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    P.vel(0)[i] = vx;
-    P.vel(1)[i] = vy;
+    for (int a = 0; a < kDim; ++a) P.vel(a)[i] = v[a];
     P.body[i] = b;
   }
-  box = {{sb.x0, 2 * plane - sb.y1}, {sb.x1, 2 * plane - sb.y0}};
+  box = sb.box;
+  box.lo[A] = 2 * plane - sb.box.hi[A];
+  box.hi[A] = 2 * plane - sb.box.lo[A];
   info.porosity = sb.porosity;
   info.voids = sb.voids;
   info.shape = sb.shape;
-  for (Void v : sb.cut) info.cut.push_back({v.x, 2 * plane - v.y, v.r});
+  for (Void m : sb.cut) {
+    m.c[A] = 2 * plane - m.c[A];
+    info.cut.push_back(m);
+  }
   return P;
 }
 
-// A body of [[bodies]] `shape` (default rectangle): its shape's keys and its points.
-Particles fill_shape(CaseReader& r, const Scene& s, BodyLattice& L, double rho0, double vx, double vy, std::uint8_t b,
+// A body of [[bodies]] `shape` (default rectangle): its shape's keys and its points, at velocity v.
+Particles fill_shape(CaseReader& r, const Scene& s, BodyLattice& L, double rho0, const Vector& v, std::uint8_t b,
                      BodyInfo& info, Box& box) {
   const BodyShape& shape = find_shape(r.choice("shape", shape_names(), "rectangle"));
   const ShapeParams p = shape.read(r);
@@ -550,7 +567,7 @@ Particles fill_shape(CaseReader& r, const Scene& s, BodyLattice& L, double rho0,
   std::string keys;
   for (const std::string& k : shape.size_keys) keys += (keys.empty() ? "" : "', '") + r.path() + "." + k;
   check_points(s, L, keys, box);
-  return fill_lattice(s.geom, L.ppc, box, rho0, vx, vy, b, [&](const Point& q) { return shape.inside(p, q); });
+  return fill_lattice(s.geom, L.ppc, box, rho0, v, b, [&](const Vector& q) { return shape.inside(p, q); });
 }
 
 // [bodies.voids]: what to cut. Voids beyond 50 times those that would tile the body change
@@ -575,8 +592,7 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
     throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
                     "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
   if (v.has("center")) {
-    const auto [cx, cy] = v.pair("center", kLength, false);
-    spec.centers.push_back({cx, cy, spec.radius});
+    spec.centers.push_back({read_vector(v, "center", kLength), spec.radius});
   } else {
     if (v.has("porosity")) spec.porosity = v.number("porosity", 0.0, 0.95);
     else spec.count = v.integer("count", 0, void_limit);
@@ -592,8 +608,9 @@ void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Part
   CaseReader v = r.table("voids");
   const VoidSpec spec = read_voids(v, s, ppc, box);
   const double period = s.geom.wrap[0] ? s.geom.length(0) : 0.0;
-  const auto res = cut_voids(P, s.geom.h / ppc, s.geom.lo[0], s.geom.lo[1], box.lo[0], box.hi[0], box.lo[1], box.hi[1],
-                             spec, period);
+  Vector origin;
+  for (int a = 0; a < kDim; ++a) origin[a] = s.geom.lo[a];
+  const auto res = cut_voids(P, s.geom.h / ppc, origin, box, spec, period);
   if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
     throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
                     std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +
@@ -621,11 +638,17 @@ void check_in_grid(const CaseReader& r, const Scene& s, const BodyInfo& info, co
 void claim_sites(const std::vector<CaseReader>& bodies, std::size_t b, const Scene& s, BodyLattice& L, const Particles& P) {
   const double d = s.geom.h / L.ppc;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const long long a = std::llround((P.pos(0)[i] - s.geom.lo[0]) / d - 0.5), c = std::llround((P.pos(1)[i] - s.geom.lo[1]) / d - 0.5);
-    auto [pos, fresh] = L.taken.emplace(c * (1LL << 32) + a, b);
+    // the site's key: its lattice index along each axis in 64 / kDim bits, the last axis highest
+    long long key = 0;
+    Vector at;  // [m]
+    for (int a = kDim - 1; a >= 0; --a) {
+      at[a] = P.pos(a)[i];
+      key = key * (1LL << (64 / kDim)) + std::llround((at[a] - s.geom.lo[a]) / d - 0.5);
+    }
+    auto [pos, fresh] = L.taken.emplace(key, b);
     if (!fresh)
       throw CaseError("case bodies '" + bodies[pos->second].path() + "' and '" + bodies[b].path() + "' overlap near (" +
-                      std::to_string(P.pos(0)[i]) + ", " + std::to_string(P.pos(1)[i]) + ") m");
+                      join_axes(at, [](double value) { return std::to_string(value); }) + ") m");
   }
 }
 
@@ -642,23 +665,27 @@ void read_body(std::vector<CaseReader>& bodies, std::size_t b, Scene& s, const M
                     " differs from the first body's " + std::to_string(L.ppc) + "; all bodies share one point lattice");
   L.ppc = ppc;
   const long src = mirror_source(r, s, info);
-  const auto [vx, vy] = src >= 0 ? r.pair("velocity", kVelocity, false, {s.bodies[src].vx0, -s.bodies[src].vy0})
-                                 : r.pair("velocity", kVelocity, false, {0.0, 0.0});
+  Vector v0{};  // the velocity's default: a mirror copy's is its source's, reflected
+  if (src >= 0) {
+    v0 = s.bodies[src].velocity;
+    v0[kImpactAxis] = -v0[kImpactAxis];
+  }
+  const Vector v = read_vector(r, "velocity", kVelocity, v0);
   const auto id = static_cast<std::uint8_t>(b);
   Box box;
-  Particles P = src >= 0 ? mirror_body(r, s, static_cast<std::size_t>(src), id, vx, vy, info, box)
-                         : fill_shape(r, s, L, s.materials[material].rho0, vx, vy, id, info, box);
+  Particles P = src >= 0 ? mirror_body(r, s, static_cast<std::size_t>(src), id, v, info, box)
+                         : fill_shape(r, s, L, s.materials[material].rho0, v, id, info, box);
   if (src < 0 && r.has("voids")) cut_body_voids(r, s, ppc, box, P, info);
   info.record_free_surface = r.boolean("record_free_surface", false);
   r.finish();
-  set_body_box(info, box);
+  info.box = box;
   check_in_grid(r, s, info, box, P);
   claim_sites(bodies, b, s, L, P);
   const double d = s.geom.h / ppc;
   info.particles = P.size();
-  info.vx0 = vx;
-  info.vy0 = vy;
-  info.area = P.size() * d * d;
+  info.velocity = v;
+  info.area = static_cast<double>(P.size());
+  for (int a = 0; a < kDim; ++a) info.area *= d;
   s.body_material.push_back(material);
   s.bodies.push_back(info);
   s.particles.append(P);
@@ -696,8 +723,10 @@ void check_contact(Scene& s, double void_reach_cells) {
                     "fields (not implemented); use a symmetric case with one field per side, or void_faces = 'single_field'");
   if (s.solver.scheme != Scheme::USL)
     throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
-  assign_void_sides(s.particles, voids, 0.0, 1.0, void_reach_cells * s.geom.h,
-                    s.geom.wrap[0] ? s.geom.length(0) : 0.0, s.solver.void_face_fields);
+  Vector impact{};  // the unit direction of the impact axis
+  impact[kImpactAxis] = 1.0;
+  assign_void_sides(s.particles, voids, impact, void_reach_cells * s.geom.h, s.geom.wrap[0] ? s.geom.length(0) : 0.0,
+                    s.solver.void_face_fields);
 }
 
 // [[bodies]]; returns the points per cell they share. The body named "target" (else body 0)
@@ -719,23 +748,30 @@ int read_bodies(CaseReader& top, Scene& s, const MaterialIndex& mat_index, doubl
   return L.ppc;
 }
 
-// [[regions]]: bands across the full width, heights measured from the impact plane y = 0
+// [[regions]]: bands across the full width, heights along the impact axis measured from the
+// impact plane y = 0
 void read_regions(CaseReader& top, Scene& s) {
-  // a band's width for its open porosity: the grid's with periodic sides, else the body's
-  auto band_width = [&](std::size_t b) { return s.geom.wrap[0] ? s.geom.length(0) : s.bodies[b].x1 - s.bodies[b].x0; };
+  // a band's width for its open porosity, over the lateral axes: the grid's along a periodic
+  // axis, else the body's
+  auto band_width = [&](std::size_t b) {
+    double w = 1.0;
+    for (int a = 0; a < kDim; ++a)
+      if (a != kImpactAxis) w *= s.geom.wrap[a] ? s.geom.length(a) : s.bodies[b].box.hi[a] - s.bodies[b].box.lo[a];
+    return w;
+  };
   auto regions = top.tables("regions");
   if (regions.empty()) {
     // the study's bands, for a target reaching 1000 um above the impact plane or more; a
     // shorter target gets the same bands scaled by its height / 1000 um, so that they stay
     // inside it and apart (a 400 um target: I 40-360, II 40-240, III 40-120 um)
-    const double f = std::clamp(s.bodies[s.target].y1 / 1000e-6, 1e-6, 1.0);
+    const double f = std::clamp(s.bodies[s.target].box.hi[kImpactAxis] / 1000e-6, 1e-6, 1.0);
     for (auto [name, a, b] : {std::tuple{"I", 100e-6, 900e-6}, {"II", 100e-6, 600e-6}, {"III", 100e-6, 300e-6}})
       s.regions.push_back({name, f * a, f * b, static_cast<std::uint8_t>(s.target), band_width(s.target)});
   }
   for (auto& r : regions) {
     Region g;
     g.name = r.string("name");
-    std::tie(g.y0, g.y1) = r.pair("y_range", kLength, true);
+    std::tie(g.lo, g.hi) = r.pair(axis_key(kImpactAxis, "_range"), kLength, true);
     const std::string body = r.string("body", s.bodies[s.target].name);
     bool found = false;
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
@@ -753,26 +789,43 @@ void read_regions(CaseReader& top, Scene& s) {
 // [[bodies]] record_free_surface: the body's top row at t = 0 (engine/gauges.hpp, top_row). Its top
 // must be free: no point of another body within a point spacing above the row, no top wall there.
 void add_free_surfaces(Scene& s, double d) {
+  constexpr int A = kImpactAxis;
   const Particles& P = s.particles;
-  const double grid_top = s.geom.lo[1] + s.geom.length(1);
+  const double grid_top = s.geom.lo[A] + s.geom.length(A);
   for (std::size_t b = 0; b < s.bodies.size(); ++b) {
     if (!s.bodies[b].record_free_surface) continue;
     FreeSurface f{s.bodies[b].name, top_row(P, static_cast<std::uint8_t>(b), d)};
-    double top = -kInf, x0 = kInf, x1 = -kInf;
-    for (const std::uint32_t i : f.ids) {
-      top = std::max(top, P.pos(1)[i]);
-      x0 = std::min(x0, P.pos(0)[i]);
-      x1 = std::max(x1, P.pos(0)[i]);
+    // the row's box: its top along the impact axis (hi[A]) and its lateral extent
+    Box row;
+    for (int a = 0; a < kDim; ++a) {
+      row.lo[a] = kInf;
+      row.hi[a] = -kInf;
     }
+    for (const std::uint32_t i : f.ids)
+      for (int a = 0; a < kDim; ++a) {
+        row.lo[a] = std::min(row.lo[a], P.pos(a)[i]);
+        row.hi[a] = std::max(row.hi[a], P.pos(a)[i]);
+      }
+    const double top = row.hi[A];
     const std::string key = "case key 'bodies[" + std::to_string(b) + "].record_free_surface' = true (body '" +
                             s.bodies[b].name + "'): its top surface at y = " +
                             format_number(std::round((top + 0.5 * d) * 1e12) * 1e-6 + 0.0) +  // [um], round-off cut
                             " um is not free: ";
+    // a point of another body within 1.5 spacings above the top, within a spacing of the row's
+    // lateral extent
+    auto on_top = [&](std::size_t i) {
+      bool on = P.body[i] != static_cast<std::uint8_t>(b);
+      for (int a = 0; a < kDim; ++a) {
+        const double q = P.pos(a)[i];
+        on = on && (a == A ? q > top && q < top + 1.5 * d : q > row.lo[a] - d && q < row.hi[a] + d);
+      }
+      return on;
+    };
     for (std::size_t i = 0; i < P.size(); ++i)
-      if (P.body[i] != static_cast<std::uint8_t>(b) && P.pos(1)[i] > top && P.pos(1)[i] < top + 1.5 * d && P.pos(0)[i] > x0 - d && P.pos(0)[i] < x1 + d)
+      if (on_top(i))
         throw CaseError(key + "body '" + s.bodies[P.body[i]].name + "' lies on it; allowed on a body whose top "
                         "(max y) surface nothing touches");
-    if (s.solver.walls.hi[1] != kern::Wall::None && top + 1.5 * d > grid_top)
+    if (s.solver.walls.hi[A] != kern::Wall::None && top + 1.5 * d > grid_top)
       throw CaseError(key + "it touches the grid's top wall (walls.top); allowed on a body whose top (max y) surface "
                       "nothing touches");
     s.free_surfaces.push_back(std::move(f));
@@ -781,28 +834,29 @@ void add_free_surfaces(Scene& s, double d) {
 
 // The positions of one [[gauges]] table: `position` (one gauge, named `name`) or `count` gauges
 // evenly from `from` to `to` (named <name>_<k>, k from 0; count 1: at `from`).
-std::vector<std::pair<std::string, std::pair<double, double>>> gauge_positions(CaseReader& r, const std::string& name) {
+std::vector<std::pair<std::string, Vector>> gauge_positions(CaseReader& r, const std::string& name) {
   const bool line = r.has("from") || r.has("to") || r.has("count");
   const std::string either = "give either 'position' (one gauge, e.g. position_um = [10.0, 200.0]) or 'from', 'to' "
                              "and 'count' (a line of gauges named " + name + "_<k>, e.g. from_um = [10.0, 100.0], "
                              "to_um = [10.0, 400.0], count = 4)";
   if (line && r.has("position"))
     throw CaseError("case table [" + r.path() + "] (gauge '" + name + "'): " + either + ", not both");
-  std::vector<std::pair<std::string, std::pair<double, double>>> at;
+  std::vector<std::pair<std::string, Vector>> at;
   if (!line) {
     try {
-      at.emplace_back(name, r.pair("position", kLength, false));
+      at.emplace_back(name, read_vector(r, "position", kLength));
     } catch (const CaseError& e) {  // missing or misspelt: say what else would do
       throw CaseError(std::string(e.what()) + "; " + either);
     }
     return at;
   }
-  const auto [ax, ay] = r.pair("from", kLength, false);
-  const auto [bx, by] = r.pair("to", kLength, false);
+  const Vector from = read_vector(r, "from", kLength), to = read_vector(r, "to", kLength);
   const long n = r.integer("count", 1, 10000);
   for (long k = 0; k < n; ++k) {
     const double f = n > 1 ? double(k) / double(n - 1) : 0.0;
-    at.emplace_back(name + "_" + std::to_string(k), std::pair{ax + f * (bx - ax), ay + f * (by - ay)});
+    Vector p;
+    for (int a = 0; a < kDim; ++a) p[a] = from[a] + f * (to[a] - from[a]);
+    at.emplace_back(name + "_" + std::to_string(k), p);
   }
   return at;
 }
@@ -834,14 +888,14 @@ void read_gauges(CaseReader& top, Scene& s) {
     const std::string keys = r.has("position") ? "case key '" + r.path() + ".position'"
                                                : "case keys '" + r.path() + ".from', '" + r.path() + ".to'";
     std::vector<int> in_body;
-    for (const auto& [gname, xy] : gauge_positions(r, name)) {
+    for (const auto& [gname, at] : gauge_positions(r, name)) {
       std::vector<bool> holds(s.bodies.size(), false);
       for (std::size_t k = 0; k < s.bodies.size(); ++k)
-        holds[k] = (body < 0 || body == static_cast<int>(k)) && in_outline(s.bodies[k], Point{xy.first, xy.second});
-      const auto near = nearest_point(s.particles, xy.first, xy.second, holds);
+        holds[k] = (body < 0 || body == static_cast<int>(k)) && in_outline(s.bodies[k], at);
+      const auto near = nearest_point(s.particles, at, holds);
       if (near.index == s.particles.size())
-        throw CaseError(keys + ": gauge '" + gname + "' at [" + format_number(xy.first * 1e6) + ", " +
-                        format_number(xy.second * 1e6) + "] um lies outside " +
+        throw CaseError(keys + ": gauge '" + gname + "' at [" +
+                        join_axes(at, [](double value) { return format_number(value * 1e6); }) + "] um lies outside " +
                         (body < 0 ? std::string("every body") : "body '" + s.bodies[body].name + "'") +
                         "; allowed: a position within a body's outline (x_range and y_range, or the disk)");
       if (std::find(names.begin(), names.end(), gname) != names.end())
@@ -859,10 +913,9 @@ void read_gauges(CaseReader& top, Scene& s) {
 
 }  // namespace
 
-Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
-                         double rho0, double vx, double vy, std::uint8_t body) {
-  const Box box{{x0, y0}, {x1, y1}};
-  return fill_lattice(g, ppc, box, rho0, vx, vy, body, [&](const Point& p) { return in_half_open(box, p); });
+Particles fill_rectangle(const kern::GridGeom& g, int ppc, const Box& box, double rho0, const Vector& v,
+                         std::uint8_t body) {
+  return fill_lattice(g, ppc, box, rho0, v, body, [&](const Vector& p) { return in_half_open(box, p); });
 }
 
 Scene build_scene(const toml::table& doc, const std::string& name, const std::filesystem::path& case_dir) {

@@ -8,6 +8,7 @@
 
 #include "engine/diagnostics.hpp"
 #include "engine/gauges.hpp"
+#include "engine/geometry.hpp"
 #include "engine/material.hpp"
 #include "engine/particles.hpp"
 #include "engine/porous.hpp"
@@ -32,8 +33,8 @@ struct BodyInfo {
   std::string material;
   std::size_t particles = 0;
   double area = 0.0;  // [m^2 per unit thickness], material area (points x point area)
-  double vx0 = 0.0, vy0 = 0.0;  // initial velocity [m/s]
-  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // bounding rectangle [m]
+  Vector velocity{};  // initial velocity [m/s]
+  Box box;            // bounding rectangle [m]
   std::string shape = "rectangle";  // [[bodies]] shape: its outline, within that rectangle
   double porosity = 0.0;  // fraction of the dense body's points removed by voids
   long voids = 0;
@@ -61,9 +62,9 @@ struct Scene {
 // Relative paths in the case (materials_file) are taken from case_dir.
 Scene build_scene(const toml::table& doc, const std::string& name, const std::filesystem::path& case_dir);
 
-// Fills a rectangle [x0, x1) x [y0, y1) with ppc x ppc points per cell of the grid lattice
-// (points at sub-cell centres), for bodies built in code (tests, benchmarks).
-Particles fill_rectangle(const kern::GridGeom& g, int ppc, double x0, double x1, double y0, double y1,
-                         double rho0, double vx, double vy, std::uint8_t body);
+// Fills the half-open box [lo, hi) with ppc points per cell along each axis of the grid lattice
+// (points at sub-cell centres), all at velocity v, for bodies built in code (tests, benchmarks).
+Particles fill_rectangle(const kern::GridGeom& g, int ppc, const Box& box, double rho0, const Vector& v,
+                         std::uint8_t body);
 
 }  // namespace smpm

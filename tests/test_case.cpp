@@ -183,16 +183,16 @@ TEST_CASE("case: default regions fit inside the target", "[case]") {
   };
   const auto tall = bands(2000.0);
   REQUIRE(tall.size() == 3);
-  CHECK(tall[0].y0 == Approx(100e-6));
-  CHECK(tall[0].y1 == Approx(900e-6));
-  CHECK(tall[1].y1 == Approx(600e-6));
-  CHECK(tall[2].y1 == Approx(300e-6));
+  CHECK(tall[0].lo == Approx(100e-6));
+  CHECK(tall[0].hi == Approx(900e-6));
+  CHECK(tall[1].hi == Approx(600e-6));
+  CHECK(tall[2].hi == Approx(300e-6));
   const auto shortr = bands(400.0);
-  CHECK(shortr[0].y0 == Approx(40e-6));
-  CHECK(shortr[0].y1 == Approx(360e-6));
-  CHECK(shortr[1].y1 == Approx(240e-6));
-  CHECK(shortr[2].y1 == Approx(120e-6));
-  for (const auto& r : shortr) CHECK(r.y1 < 400e-6);
+  CHECK(shortr[0].lo == Approx(40e-6));
+  CHECK(shortr[0].hi == Approx(360e-6));
+  CHECK(shortr[1].hi == Approx(240e-6));
+  CHECK(shortr[2].hi == Approx(120e-6));
+  for (const auto& r : shortr) CHECK(r.hi < 400e-6);
 }
 
 // [figures]: optional colour ranges of the maps, validated and carried in the resolved case.
@@ -217,8 +217,8 @@ TEST_CASE("case: --set into [[bodies]] by index and by name", "[case]") {
     apply_overrides(doc, {set});
     return build_scene(doc, "t", ".");
   };
-  CHECK(with("bodies.0.velocity_m_s=[0.0, -800.0]").bodies[0].vy0 == -800.0);
-  CHECK(with("bodies.target.velocity_m_s=[0.0, -700.0]").bodies[0].vy0 == -700.0);
+  CHECK(with("bodies.0.velocity_m_s=[0.0, -800.0]").bodies[0].velocity[1] == -800.0);
+  CHECK(with("bodies.target.velocity_m_s=[0.0, -700.0]").bodies[0].velocity[1] == -700.0);
   CHECK_THROWS_WITH(with("bodies.3.velocity_m_s=[0.0, -1.0]"), Catch::Contains("no entry '3'") && Catch::Contains("0 (target)"));
   CHECK_THROWS_WITH(with("bodies.flyer.velocity_m_s=[0.0, -1.0]"), Catch::Contains("no entry 'flyer'"));
   CHECK_THROWS_WITH(with("bodies.velocity_m_s=[0.0, -1.0]"), Catch::Contains("name an entry"));

@@ -36,8 +36,8 @@ double slope_acceleration(double theta_deg, double mu) {
   m.rho0 = 1000.0;
   m.E = 1e7;
   m.nu = 0.3;
-  Particles P = fill_rectangle(g, 2, 0.0, 1.0, 0.0, 0.1, m.rho0, 0.0, 0.0, 0);
-  P.append(fill_rectangle(g, 2, 0.1, 0.3, 0.1, 0.2, m.rho0, 0.0, 0.0, 1));
+  Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0}, {1.0, 0.1}}, m.rho0, Vector{0.0, 0.0}, 0);
+  P.append(fill_rectangle(g, 2, Box{{0.1, 0.1}, {0.3, 0.2}}, m.rho0, Vector{0.0, 0.0}, 1));
   Simulation sim(g, cfg, {m}, {0, 0}, P);
   std::vector<double> t, v;
   while (sim.time() < 0.3) {

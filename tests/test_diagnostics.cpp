@@ -33,12 +33,12 @@ TEST_CASE("moments against hand-computed values", "[diagnostics]") {
 
 TEST_CASE("velocity-gradient measures: rigid rotation and uniform expansion", "[diagnostics]") {
   const double w = 3.0;  // rigid rotation v = w (-y, x): L = [[0, -w], [w, 0]]
-  const auto r = gradient_measures(0.0, -w, w, 0.0);
+  const auto r = gradient_measures(kern::Mat<2>{{{0.0, -w}, {w, 0.0}}});
   CHECK(std::sqrt(r.R2) == Approx(2 * w));  // |curl v| = 2 omega
   CHECK(r.D2 == 0.0);
   CHECK(r.S2 == 0.0);                        // no strain rate in a rigid rotation
   const double a = 0.7;  // uniform expansion v = a (x, y): L = a I
-  const auto e = gradient_measures(a, 0.0, 0.0, a);
+  const auto e = gradient_measures(kern::Mat<2>{{{a, 0.0}, {0.0, a}}});
   CHECK(std::sqrt(e.D2) == Approx(2 * a));   // div v = 2 a in 2D
   CHECK(e.R2 == 0.0);
   CHECK(e.S2 == Approx(2 * a * a));          // D:D = a^2 + a^2

@@ -34,7 +34,7 @@ TEST_CASE("heat conduction: 1D temperature step against the erf solution", "[ver
   const double y0 = 0.5, T1 = 400.0, T2 = 300.0;
   for (auto shape : {kern::ShapeKind::Linear, kern::ShapeKind::Quadratic}) {
     cfg.shape = shape;
-    Particles P = fill_rectangle(g, 2, 0.0, 0.04, 0.0, 1.0, 1.0, 0.0, 0.0, 0);
+    Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0}, {0.04, 1.0}}, 1.0, Vector{0.0, 0.0}, 0);
     Simulation sim(g, cfg, {m}, {0}, P);
     auto& Q = sim.particles();
     for (std::size_t i = 0; i < Q.size(); ++i) Q.e[i] = m.cv * ((Q.x[1][i] < y0 ? T1 : T2) - m.T0);

@@ -52,7 +52,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/" + file);
   apply_overrides(doc, overrides);
   Scene sc = build_scene(doc, file, std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
-  const double v = -sc.bodies[0].vy0;
+  const double v = -sc.bodies[0].velocity[1];
   const Material mat = sc.materials[0];
   const auto& g = sc.geom;
   Simulation sim(g, sc.solver, sc.materials, sc.body_material, sc.particles);
