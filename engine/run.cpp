@@ -98,11 +98,11 @@ constexpr Column<EnergyRow> kEnergyColumns[] = {
 
 // front.csv: the compression front's position at a time
 struct FrontRow {
-  double t, y;  // [s], [m]
+  double t, at;  // [s], the front's position along the impact axis [m]
 };
 constexpr Column<FrontRow> kFrontColumns[] = {
     {"time_ns", "ns", [](const FrontRow& r) { return r.t * 1e9; }},
-    {"front_y_um", "um", [](const FrontRow& r) { return r.y * 1e6; }},
+    {"front_y_um", "um", [](const FrontRow& r) { return r.at * 1e6; }},
 };
 
 // wall.csv: the bottom wall's normal stress at a time, its force per unit depth over its width
@@ -339,17 +339,26 @@ void write_run_json(const std::filesystem::path& file, const Scene& scene, const
   write_json_file(file, t);
 }
 
+// "(x, y) um": point i's position, in o's number format
+std::ostream& put_position_um(std::ostream& o, const Particles& P, std::size_t i) {
+  o << "(";
+  for (int d = 0; d < kern::kDim; ++d) o << (d ? ", " : "") << P.x[d][i] * 1e6;
+  return o << ") um";
+}
+
 // `check`'s lines on the followed points: each gauge (only their count beyond 20), each free surface.
 void describe_points(std::ostream& o, const Scene& sc) {
   const Particles& P = sc.particles;
   if (!sc.gauges.empty()) o << "gauges          " << sc.gauges.size() << " (gauges.csv)\n";
   if (sc.gauges.size() <= 20)
-    for (const auto& g : sc.gauges)
+    for (const auto& g : sc.gauges) {
       o << "  gauge " << std::left << std::setw(10) << g.name << std::right << " point " << g.id << " of body "
-        << sc.bodies[P.body[g.id]].name << " at (" << P.x[0][g.id] * 1e6 << ", " << P.x[1][g.id] * 1e6 << ") um\n";
+        << sc.bodies[P.body[g.id]].name << " at ";
+      put_position_um(o, P, g.id) << "\n";
+    }
   for (const auto& f : sc.free_surfaces)
-    o << "free surface    body " << f.body_name << ": the " << f.ids.size() << " points of its top row at y = "
-      << P.x[1][f.ids.front()] * 1e6 << " um (freesurface.csv)\n";
+    o << "free surface    body " << f.body_name << ": the " << f.ids.size() << " points of its top row at "
+      << kern::kAxisNames[kImpactAxis] << " = " << P.x[kImpactAxis][f.ids.front()] * 1e6 << " um (freesurface.csv)\n";
 }
 
 }  // namespace
@@ -511,7 +520,7 @@ class RunOutputs {
   SnapshotWriter snaps_;
   // the compression front runs through the target: the body named "target", else body 0
   std::size_t target_;
-  double vy0_;  // the target's initial y-velocity [m/s]
+  double u0_;  // the target's initial velocity along the impact axis [m/s]
   CsvFile voids_, series_, front_, energy_, gauges_, surface_, wall_;
   std::vector<std::vector<double>> table_;  // series.h5: one vector per column of kSeriesColumns
   double E0_ = 0.0;                         // total energy at t = 0 [J/m]
@@ -521,7 +530,7 @@ class RunOutputs {
 RunOutputs::RunOutputs(const Scene& scene, const Simulation& sim, const std::filesystem::path& out, RunSummary& s,
                        const CheckpointReader* resume)
     : scene_(scene), sim_(sim), out_(out), s_(s), snaps_(out / "fields"), target_(scene.target),
-      vy0_(scene.bodies[scene.target].velocity[kImpactAxis]), table_(std::size(kSeriesColumns)),
+      u0_(scene.bodies[scene.target].velocity[kImpactAxis]), table_(std::size(kSeriesColumns)),
       points_(scene.gauges, scene.free_surfaces, sim.particles().size()) {
   if (resume) snaps_.adopt(resume->text("run/snapshots"));
   // voids.csv: the void area left open in the target (and its share of each region's band), at
@@ -532,7 +541,7 @@ RunOutputs::RunOutputs(const Scene& scene, const Simulation& sim, const std::fil
   if (resume)
     for (std::size_t c = 0; c < table_.size(); ++c)
       resume->get(std::string("series/") + kSeriesColumns[c].name, table_[c]);
-  if (vy0_ != 0.0) front_.open(out / "front.csv", csv_header(kFrontColumns), 10, resume);
+  if (u0_ != 0.0) front_.open(out / "front.csv", csv_header(kFrontColumns), 10, resume);
   energy_.open(out / "energy.csv", csv_header(kEnergyColumns), 12, resume);
   E0_ = resume ? resume->number("run/E0") : sim.energy().total();
   // gauges.csv and freesurface.csv: the points followed from t = 0 (engine/gauges.hpp), with
@@ -567,13 +576,14 @@ void RunOutputs::write_points() {
 }
 
 void RunOutputs::write_front() {
-  if (vy0_ == 0.0) return;
+  if (u0_ == 0.0) return;
   Timed t(s_.diagnostics_seconds);
   const auto& g = scene_.geom;
-  const double y =
-      front_position(sim_.particles(), static_cast<std::uint8_t>(target_), vy0_, g.lo[1], g.h, g.n[1], vy0_ < 0);
-  if (std::isfinite(y)) {
-    front_.row(kFrontColumns, FrontRow{sim_.time(), y});
+  const int a = kImpactAxis;
+  const double at =
+      front_position(sim_.particles(), static_cast<std::uint8_t>(target_), u0_, g.lo[a], g.h, g.n[a], u0_ < 0);
+  if (std::isfinite(at)) {
+    front_.row(kFrontColumns, FrontRow{sim_.time(), at});
     front_.flush();
   }
 }
@@ -604,7 +614,7 @@ void RunOutputs::write_series_h5() {
 void RunOutputs::write_wall() {
   if (!wall_.is_open()) return;
   Timed t(s_.diagnostics_seconds);
-  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().lo[1], scene_.geom.length(0)});
+  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().lo[kImpactAxis], scene_.geom.length(0)});
   wall_.flush();
 }
 
@@ -616,16 +626,29 @@ void RunOutputs::write_voids() {
   const auto& g = scene_.geom;
   const auto& body = scene_.bodies[target_];
   const double pixel = std::sqrt(body.area / double(body.particles)) / 3;  // [m]
-  const double period = g.wrap[0] ? g.length(0) : 0.0, x1 = g.lo[0] + g.length(0);
+  const double period = g.wrap[0] ? g.length(0) : 0.0;
   const auto b = static_cast<std::uint8_t>(target_);
-  std::vector<Window> win{Window{{g.lo[0], -1e300}, {x1, 1e300}}};
-  for (const auto& r : scene_.regions) win.push_back(Window{{g.lo[0], r.lo}, {x1, r.hi}});
+  // the windows: the grid's lateral extent, along the impact axis all of it or a region's band
+  Window all;
+  double lateral = 1.0;  // the lateral extent's length (D = 2) or area (D = 3) [m, m^2]
+  for (int d = 0; d < kern::kDim; ++d) {
+    all.lo[d] = d == kImpactAxis ? -1e300 : g.lo[d];
+    all.hi[d] = d == kImpactAxis ? 1e300 : g.lo[d] + g.length(d);
+    if (d != kImpactAxis) lateral *= g.length(d);
+  }
+  std::vector<Window> win{all};
+  for (const auto& r : scene_.regions) {
+    Window w = all;
+    w.lo[kImpactAxis] = r.lo;
+    w.hi[kImpactAxis] = r.hi;
+    win.push_back(w);
+  }
   const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.lo[0]);
   voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
   for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
     const auto& r = scene_.regions[k];
     if (r.body != b) continue;
-    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.hi - r.lo) * g.length(0))});
+    voids_.row(kVoidsColumns, VoidsRow{sim_.time(), r.name, a[k + 1], a[k + 1] / ((r.hi - r.lo) * lateral)});
   }
   voids_.flush();
 }

@@ -11,6 +11,7 @@
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
 #include "engine/simulation.hpp"
+#include "tests/particle_checks.hpp"
 
 using namespace smpm;
 
@@ -135,13 +136,10 @@ TEST_CASE("L is stored only where asked: the same run, the statistics rows read 
     REQUIRE(a.gradient_current());
     REQUIRE(b.gradient_current() == (s % 10 == 0));
     const Particles &A = a.particles(), &B = b.particles();
-    for (auto f : {&Particles::x, &Particles::y, &Particles::vx, &Particles::vy, &Particles::V, &Particles::sxx,
-                   &Particles::syy, &Particles::sxy, &Particles::p})
-      REQUIRE(A.*f == B.*f);
-    if (s % 10 == 0)
-      for (auto f : {&Particles::Lxx, &Particles::Lxy, &Particles::Lyx, &Particles::Lyy}) REQUIRE(A.*f == B.*f);
+    test::require_same(A, B, {"x", "y", "vx", "vy", "V", "sxx", "syy", "sxy", "p"});
+    if (s % 10 == 0) test::require_same(A, B, {"Lxx", "Lxy", "Lyx", "Lyy"});
     if (s < 10)  // never stored: the initial arrays, in the same order (no permutation after step 0)
-      for (auto f : {&Particles::Lxx, &Particles::Lyy}) REQUIRE(B.*f == L0.*f);
+      test::require_same(B, L0, {"Lxx", "Lyy"});
   }
   REQUIRE(a.time() == b.time());
   // the driver stores L for the steps its statistics follow: every row's gradient measures are

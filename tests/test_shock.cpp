@@ -68,7 +68,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
     sim.step(t_end - sim.time());
     const double t = sim.time();
     if (t > 0.5 * t_end) {
-      wall_sum += sim.wall_forces().bottom / g.length(0);
+      wall_sum += sim.wall_forces().lo[kImpactAxis] / g.length(0);
       wall_n += 1;
     }
     if (sim.steps() % 10 == 0 && t > 0.2 * t_end) {
