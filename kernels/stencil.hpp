@@ -75,6 +75,22 @@ struct Stencil {
 #pragma GCC unroll 64
     for (int k = 0; k < Nodes; ++k) f(digits(k), k);
   }
+  // The same calls in the same order, as a loop over the lines of nodes along axis 0 with the
+  // line unrolled: for the scatter, one point at a time, where for_each's full unroll spends
+  // more instructions on node addresses than on the sums (the gathers, vectorized across
+  // points, need the full unroll).
+  template <class F>
+  SMPM_INLINE void for_each_by_line(F&& f) const {
+#pragma GCC unroll 1
+    for (int l = 0; l < Nodes / N; ++l) {
+      Idx<D> a = digits(l * N);
+#pragma GCC unroll 8
+      for (int a0 = 0; a0 < N; ++a0) {
+        a[0] = a0;
+        f(static_cast<const Idx<D>&>(a), l * N + a0);
+      }
+    }
+  }
 };
 
 }  // namespace smpm::kern

@@ -39,6 +39,7 @@ struct GridSink {
   const GridGeom& g;
   const GridView& G;
   std::size_t node(const Idx<kDim>& i) const { return g.node(i); }
+  std::size_t stride(int d) const { return g.stride(d); }
   std::size_t field_offset(std::size_t f) const { return f * G.fstride; }
   inline void add_momentum(std::size_t n, const double* q) const {
     for (int d = 0; d < kDim; ++d) Add::add(G.p[d][n], q[d]);
@@ -81,6 +82,11 @@ struct TileSink {
     for (int d = kDim - 1; d >= 0; --d) k = k * static_cast<std::size_t>(span) + static_cast<std::size_t>(i[d] - lo[d]);
     return k;
   }
+  std::size_t stride(int d) const {
+    std::size_t k = 1;
+    for (int e = 0; e < d; ++e) k *= static_cast<std::size_t>(span);
+    return k;
+  }
   std::size_t field_offset(std::size_t f) const { return f * static_cast<std::size_t>(ipow(span, kDim)); }
   inline void add_momentum(std::size_t n, const double* q) const {
     for (int d = 0; d < kDim; ++d) s[K * n + Slot::momentum + d] += q[d];
@@ -102,6 +108,14 @@ SMPM_INLINE Vec<kDim> grid_units(const GridGeom& g, const ParticleView& P, std::
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) u[d] = (P.pos(d)[p] - g.origin(d)) * inv_h;
   return u;
+}
+// Storage index of the stencil node with offsets a, from the index of the stencil's first node
+// (formed once per point) and the storage's strides (GridGeom, a sink).
+template <class Storage>
+SMPM_INLINE std::size_t node_index(const Storage& s, std::size_t first, const Idx<kDim>& a) {
+#pragma GCC unroll 3
+  for (int d = 0; d < kDim; ++d) first += static_cast<std::size_t>(a[d]) * s.stride(d);
+  return first;
 }
 // The stencil's node i (its offsets a) as grid indices.
 template <class St>
@@ -145,8 +159,9 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
   }
   const std::size_t foff = Contact ? sink.field_offset(P.field(p)) : 0;
   const double mh = m * inv_h, Vp = Contact ? P.V[p] : 0.0;
-  st.for_each([&](const Idx<D>& a, int) {
-    const std::size_t n = sink.node(node_of(st, a)) + foff;
+  const std::size_t first = sink.node(node_of(st, Idx<D>{})) + foff;
+  st.for_each_by_line([&](const Idx<D>& a, int) {
+    const std::size_t n = node_index(sink, first, a);
     const double w = st.weight(a);
     double q[D];
 #pragma GCC unroll 3
@@ -465,8 +480,9 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
   GatherSums S;
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
+  const std::size_t first = g.node(node_of(st, Idx<D>{})) + foff;
   st.for_each([&](const Idx<D>& a, int) {
-    const std::size_t n = g.node(node_of(st, a)) + foff;
+    const std::size_t n = node_index(g, first, a);
     const double w = st.weight(a);
     double gv[D], lv[D];  // the node's velocity; the mid-step one of the work rate
 #pragma GCC unroll 3
