@@ -60,8 +60,9 @@ void heat_scatter(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, 
           const std::uint32_t p = order[s];
           const auto st = heat_stencil<Shape>(g, P, p, lp);
           const double c = P.m[p] * P.cv_body[P.body[p]], cT = c * P.T[p];
-          st.for_each([&](const Idx<kDim>& a, int) {
-            double* v = blk.s + 2 * sink.node(node_of(st, a));
+          const std::size_t first = sink.node(node_of(st, Idx<kDim>{}));
+          st.for_each_by_line([&](const Idx<kDim>& a, int) {
+            double* v = blk.s + 2 * node_index(sink, first, a);
             const double w = st.weight(a);
             v[0] += w * c;
             v[1] += w * cT;
@@ -87,8 +88,9 @@ void heat_gather(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, s
   for (std::size_t p = 0; p < n; ++p) {
     const auto st = heat_stencil<Shape>(g, P, p, lp);
     double dT = 0.0, T = 0.0;
+    const std::size_t first = g.node(node_of(st, Idx<kDim>{}));
     st.for_each([&](const Idx<kDim>& a, int) {
-      const std::size_t k = g.node(node_of(st, a));
+      const std::size_t k = node_index(g, first, a);
       const double w = st.weight(a);
       dT += w * H.dT[k];
       T += w * H.T[k];
