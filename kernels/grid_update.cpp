@@ -34,67 +34,60 @@ void grid_update(const GridGeom& g, const NodeBox& box, const GridView& G, const
   const NodeBox b = real_nodes(g, box);
   const double inv_dt = q.dt > 0.0 ? 1.0 / q.dt : 0.0;
   if (row_force) std::fill(row_force, row_force + kRowSlots * static_cast<std::size_t>(g.num_lines()), 0.0);
-  const int lines = b.lines();
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = b.line_start(r);
-    const int line = g.line(i);
-    double rf[kRowSlots] = {};
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
-      const std::size_t n = g.node(i);
-      const double m = G.m[n];
-      if (m <= 0.0) {
-        for (int d = 0; d < kDim; ++d) {
-          G.v[d][n] = 0.0;
-          if (q.flip) G.dv[d][n] = 0.0;
-          if (q.scatter_velocity) G.p[d][n] = 0.0;
+  struct Row {
+    double rf[kRowSlots];
+  };
+  for_each_node_by_line<Row>(
+      g, b,
+      [&](Row& row, const Idx<kDim>& i, std::size_t n) {
+        double* rf = row.rf;
+        const double m = G.m[n];
+        if (m <= 0.0) {
+          for (int d = 0; d < kDim; ++d) {
+            G.v[d][n] = 0.0;
+            if (q.flip) G.dv[d][n] = 0.0;
+            if (q.scatter_velocity) G.p[d][n] = 0.0;
+          }
+          return;
         }
-        continue;
-      }
-      const double inv_m = 1.0 / m;
-      const double acc = m > q.mass_eps ? q.dt : 0.0;
-      double u[kDim], v[kDim];  // old and new velocity
-      for (int d = 0; d < kDim; ++d) u[d] = G.p[d][n] * inv_m;
-      for (int d = 0; d < kDim; ++d) v[d] = u[d] + acc * (G.f[d][n] * inv_m + q.gravity[d]);
-      double scratch[2 * kDim] = {};
-      const double u2 = norm2(u);
-      constrain(g, q.walls, i, u, scratch);
-      double lost = u2;
-      for (int d = 0; d < kDim; ++d) lost -= u[d] * u[d];
-      rf[2 * kDim] += 0.5 * m * lost;
-      if (q.scatter_velocity)  // after the walls: see GridUpdateParams
-        for (int d = 0; d < kDim; ++d) G.p[d][n] = u[d];
-      double dv[2 * kDim] = {};
-      constrain(g, q.walls, i, v, dv);
-      for (int k = 0; k < 2 * kDim; ++k) rf[k] += m * dv[k] * inv_dt;
-      for (int d = 0; d < kDim; ++d) {
-        G.v[d][n] = v[d];
-        if (q.flip) G.dv[d][n] = v[d] - u[d];
-      }
-    }
-    if (row_force)
-      for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * line + k] = rf[k];
-  }
+        const double inv_m = 1.0 / m;
+        const double acc = m > q.mass_eps ? q.dt : 0.0;
+        double u[kDim], v[kDim];  // old and new velocity
+        for (int d = 0; d < kDim; ++d) u[d] = G.p[d][n] * inv_m;
+        for (int d = 0; d < kDim; ++d) v[d] = u[d] + acc * (G.f[d][n] * inv_m + q.gravity[d]);
+        double scratch[2 * kDim] = {};
+        const double u2 = norm2(u);
+        constrain(g, q.walls, i, u, scratch);
+        double lost = u2;
+        for (int d = 0; d < kDim; ++d) lost -= u[d] * u[d];
+        rf[2 * kDim] += 0.5 * m * lost;
+        if (q.scatter_velocity)  // after the walls: see GridUpdateParams
+          for (int d = 0; d < kDim; ++d) G.p[d][n] = u[d];
+        double dv[2 * kDim] = {};
+        constrain(g, q.walls, i, v, dv);
+        for (int k = 0; k < 2 * kDim; ++k) rf[k] += m * dv[k] * inv_dt;
+        for (int d = 0; d < kDim; ++d) {
+          G.v[d][n] = v[d];
+          if (q.flip) G.dv[d][n] = v[d] - u[d];
+        }
+      },
+      [&](const Row& row, int line) {
+        if (row_force)
+          for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * line + k] = row.rf[k];
+      });
 }
 
 void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q) {
-  const NodeBox b = real_nodes(g, box);
-  const int lines = b.lines();
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = b.line_start(r);
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
-      const std::size_t n = g.node(i);
-      const double m = G.m[n];
-      double v[kDim] = {};
-      if (m > 0.0) {
-        for (int d = 0; d < kDim; ++d) v[d] = G.p[d][n] / m;
-        double dv[2 * kDim] = {};
-        constrain(g, q.walls, i, v, dv);
-      }
-      for (int d = 0; d < kDim; ++d) G.v[d][n] = v[d];
+  for_each_node_by_line(g, real_nodes(g, box), [&](const Idx<kDim>& i, std::size_t n) {
+    const double m = G.m[n];
+    double v[kDim] = {};
+    if (m > 0.0) {
+      for (int d = 0; d < kDim; ++d) v[d] = G.p[d][n] / m;
+      double dv[2 * kDim] = {};
+      constrain(g, q.walls, i, v, dv);
     }
-  }
+    for (int d = 0; d < kDim; ++d) G.v[d][n] = v[d];
+  });
 }
 
 void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all) {
@@ -132,49 +125,46 @@ void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const
                  double* row_loss) {
   const NodeBox b = real_nodes(g, box);
   const std::size_t fs = G.fstride;
-  const int K = G.fields, lines = b.lines();
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = b.line_start(r);
-    const int line = g.line(i);
-    double row = 0.0;
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
-      const std::size_t a = g.node(i);
-      double M = 0.0, V = 0.0, mv[kDim] = {}, mp[kDim] = {};
-      int present = 0;
-      for (int f = 0; f < K; ++f) {
-        const std::size_t k = a + f * fs;
-        G.heat[k] = 0.0;
-        V += G.vol[k];
-        const double m = G.m[k];
-        if (m <= q.mass_eps) continue;
-        ++present;
-        M += m;
-        for (int d = 0; d < kDim; ++d) {
-          mv[d] += m * G.v[d][k];
-          mp[d] += m * G.p[d][k];
+  const int K = G.fields;
+  for_each_node_by_line<double>(
+      g, b,
+      [&](double& row, const Idx<kDim>&, std::size_t a) {
+        double M = 0.0, V = 0.0, mv[kDim] = {}, mp[kDim] = {};
+        int present = 0;
+        for (int f = 0; f < K; ++f) {
+          const std::size_t k = a + f * fs;
+          G.heat[k] = 0.0;
+          V += G.vol[k];
+          const double m = G.m[k];
+          if (m <= q.mass_eps) continue;
+          ++present;
+          M += m;
+          for (int d = 0; d < kDim; ++d) {
+            mv[d] += m * G.v[d][k];
+            mp[d] += m * G.p[d][k];
+          }
         }
-      }
-      if (present < 2 || V < vmin) continue;
-      double c[kDim], u[kDim];  // centre-of-mass velocity after the forces and before them
-      for (int d = 0; d < kDim; ++d) {
-        c[d] = mv[d] / M;
-        u[d] = mp[d] / M;
-      }
-      for (int f = 0; f < K; ++f) {
-        const std::size_t k = a + f * fs;
-        if (G.m[k] <= q.mass_eps) continue;
-        double e[kDim];
-        for (int d = 0; d < kDim; ++d) e[d] = G.p[d][k] - u[d];
-        row += 0.5 * G.m[k] * norm2(e);
+        if (present < 2 || V < vmin) return;
+        double c[kDim], u[kDim];  // centre-of-mass velocity after the forces and before them
         for (int d = 0; d < kDim; ++d) {
-          G.p[d][k] = u[d];
-          G.v[d][k] = c[d];  // (scatter_velocity means APIC: no FLIP increments)
+          c[d] = mv[d] / M;
+          u[d] = mp[d] / M;
         }
-      }
-    }
-    if (row_loss) row_loss[line] = row;
-  }
+        for (int f = 0; f < K; ++f) {
+          const std::size_t k = a + f * fs;
+          if (G.m[k] <= q.mass_eps) continue;
+          double e[kDim];
+          for (int d = 0; d < kDim; ++d) e[d] = G.p[d][k] - u[d];
+          row += 0.5 * G.m[k] * norm2(e);
+          for (int d = 0; d < kDim; ++d) {
+            G.p[d][k] = u[d];
+            G.v[d][k] = c[d];  // (scatter_velocity means APIC: no FLIP increments)
+          }
+        }
+      },
+      [&](double row, int line) {
+        if (row_loss) row_loss[line] = row;
+      });
 }
 
 // Coulomb contact (or FLIP's weld) of field 0's velocity v0 against the centre of mass c at a
@@ -256,7 +246,8 @@ SMPM_INLINE double contact_loss(const GridView& G, std::size_t a, std::size_t b,
 
 void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q,
                   const ContactParams& c, double* row_loss) {
-  const double vmin = (c.volume_fraction - 1e-9) * g.h * g.h;  // a full node passes despite round-off
+  double vmin = c.volume_fraction - 1e-9;  // times h^kDim: a full node passes despite round-off
+  for (int d = 0; d < kDim; ++d) vmin *= g.h;
   if (row_loss) std::fill(row_loss, row_loss + g.num_lines(), 0.0);
   if (c.weld && q.scatter_velocity) {
     weld_fields(g, box, G, q, vmin, row_loss);
@@ -264,52 +255,49 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
   }
   const NodeBox nb = real_nodes(g, box);
   const std::size_t fs = G.fstride;
-  const int lines = nb.lines();
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = nb.line_start(r);
-    const int line = g.line(i);
-    double row = 0.0;
-    for (i[0] = nb.lo[0]; i[0] <= nb.hi[0]; ++i[0]) {
-      const std::size_t a = g.node(i), b = a + fs;
-      G.heat[a] = G.heat[b] = 0.0;
-      const double m0 = G.m[a], m1 = G.m[b];
-      if (m0 <= q.mass_eps || m1 <= q.mass_eps || G.vol[a] + G.vol[b] < vmin) continue;
-      const double M = m0 + m1;
-      double cm[kDim], u[kDim], w[kDim];  // centre of mass; corrected velocities of fields 0, 1
-      for (int d = 0; d < kDim; ++d) cm[d] = (m0 * G.v[d][a] + m1 * G.v[d][b]) / M;
-      if (!coulomb(G, a, b, cm, c, u)) continue;
-      for (int d = 0; d < kDim; ++d) w[d] = (M * cm[d] - m0 * u[d]) / m1;
-      double scratch[2 * kDim] = {};
-      constrain(g, q.walls, i, u, scratch);
-      constrain(g, q.walls, i, w, scratch);
-      // Energy the contact step removes, per unit of the node's mass, for the heating gather.
-      // Each field f goes from its scatter velocity u_f (walls applied) to its final velocity
-      // v'_f; its impulse before contact J_f = m_f (v_f - u_f) works through the mid-step
-      // velocity (u_f + v'_f) / 2 (the USL gather's L), so the node's energy changes by
-      //   sum_f 1/2 m_f (|v'_f|^2 - |u_f|^2) - 1/2 J_f . (u_f + v'_f)
-      // which is 0 without contact (v'_f = v_f) and minus the contact's loss with it. (The
-      // kinetic energy of the velocities after the forces alone, 1/2 m_f |v_f|^2, counts a
-      // field with a sliver of mass at a node, whose force gave it a large velocity, as holding
-      // energy no step gave it: +80 % energy over a void collapse.)
-      // With the updated velocity in L the step's own balance is off by the explicit defect
-      // -1/2 m_f |v_f - u_f|^2 per field, which contact must not count: then a weld's loss is
-      // 1/2 mu |u_0 - u_1|^2 (mu = m0 m1 / M, the node then balances as the single field's), a
-      // Coulomb contact's the drop of 1/2 mu |v_0 - v_1|^2.
-      const double loss = contact_loss(G, a, b, m0, m1, u, w, q, c);
-      G.heat[a] = G.heat[b] = loss / M;
-      row += loss;
-      for (int d = 0; d < kDim; ++d) {
-        if (q.flip) {
-          G.dv[d][a] += u[d] - G.v[d][a];
-          G.dv[d][b] += w[d] - G.v[d][b];
+  for_each_node_by_line<double>(
+      g, nb,
+      [&](double& row, const Idx<kDim>& i, std::size_t a) {
+        const std::size_t b = a + fs;
+        G.heat[a] = G.heat[b] = 0.0;
+        const double m0 = G.m[a], m1 = G.m[b];
+        if (m0 <= q.mass_eps || m1 <= q.mass_eps || G.vol[a] + G.vol[b] < vmin) return;
+        const double M = m0 + m1;
+        double cm[kDim], u[kDim], w[kDim];  // centre of mass; corrected velocities of fields 0, 1
+        for (int d = 0; d < kDim; ++d) cm[d] = (m0 * G.v[d][a] + m1 * G.v[d][b]) / M;
+        if (!coulomb(G, a, b, cm, c, u)) return;
+        for (int d = 0; d < kDim; ++d) w[d] = (M * cm[d] - m0 * u[d]) / m1;
+        double scratch[2 * kDim] = {};
+        constrain(g, q.walls, i, u, scratch);
+        constrain(g, q.walls, i, w, scratch);
+        // Energy the contact step removes, per unit of the node's mass, for the heating gather.
+        // Each field f goes from its scatter velocity u_f (walls applied) to its final velocity
+        // v'_f; its impulse before contact J_f = m_f (v_f - u_f) works through the mid-step
+        // velocity (u_f + v'_f) / 2 (the USL gather's L), so the node's energy changes by
+        //   sum_f 1/2 m_f (|v'_f|^2 - |u_f|^2) - 1/2 J_f . (u_f + v'_f)
+        // which is 0 without contact (v'_f = v_f) and minus the contact's loss with it. (The
+        // kinetic energy of the velocities after the forces alone, 1/2 m_f |v_f|^2, counts a
+        // field with a sliver of mass at a node, whose force gave it a large velocity, as holding
+        // energy no step gave it: +80 % energy over a void collapse.)
+        // With the updated velocity in L the step's own balance is off by the explicit defect
+        // -1/2 m_f |v_f - u_f|^2 per field, which contact must not count: then a weld's loss is
+        // 1/2 mu |u_0 - u_1|^2 (mu = m0 m1 / M, the node then balances as the single field's), a
+        // Coulomb contact's the drop of 1/2 mu |v_0 - v_1|^2.
+        const double loss = contact_loss(G, a, b, m0, m1, u, w, q, c);
+        G.heat[a] = G.heat[b] = loss / M;
+        row += loss;
+        for (int d = 0; d < kDim; ++d) {
+          if (q.flip) {
+            G.dv[d][a] += u[d] - G.v[d][a];
+            G.dv[d][b] += w[d] - G.v[d][b];
+          }
+          G.v[d][a] = u[d];
+          G.v[d][b] = w[d];
         }
-        G.v[d][a] = u[d];
-        G.v[d][b] = w[d];
-      }
-    }
-    if (row_loss) row_loss[line] = row;
-  }
+      },
+      [&](double row, int line) {
+        if (row_loss) row_loss[line] = row;
+      });
 }
 
 namespace {

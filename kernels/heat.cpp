@@ -18,35 +18,24 @@ void heat_temperatures(const GridGeom& g, const HeatGrid& H) {
 
 void heat_conduct(const GridGeom& g, const HeatGrid& H, double k, double c_min, double dt) {
   const NodeBox all = g.all_nodes(), b = real_nodes(g, all);
-  const int lines = b.lines();
   // fluxes into capT (reused as the heat power Q_i): the two neighbours along each axis, the
   // low one first, where they exist in the storage
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = b.line_start(r);
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
-      const std::size_t n = g.node(i);
-      double Q = 0.0;
-      if (H.cap[n] >= c_min) {
-        const double T = H.T[n];
-        for (int d = 0; d < kDim; ++d) {
-          const std::size_t s = g.stride(d);
-          const std::size_t nb[2] = {i[d] > all.lo[d] ? n - s : n, i[d] < all.hi[d] ? n + s : n};
-          for (std::size_t m : nb)
-            if (m != n && H.cap[m] >= c_min) Q += k * (H.T[m] - T);
-        }
+  for_each_node_by_line(g, b, [&](const Idx<kDim>& i, std::size_t n) {
+    double Q = 0.0;
+    if (H.cap[n] >= c_min) {
+      const double T = H.T[n];
+      for (int d = 0; d < kDim; ++d) {
+        const std::size_t s = g.stride(d);
+        const std::size_t nb[2] = {i[d] > all.lo[d] ? n - s : n, i[d] < all.hi[d] ? n + s : n};
+        for (std::size_t m : nb)
+          if (m != n && H.cap[m] >= c_min) Q += k * (H.T[m] - T);
       }
-      H.capT[n] = Q;
     }
-  }
-#pragma omp parallel for schedule(static)
-  for (int r = 0; r < lines; ++r) {
-    Idx<kDim> i = b.line_start(r);
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) {
-      const std::size_t n = g.node(i);
-      H.dT[n] = H.cap[n] >= c_min ? dt * H.capT[n] / H.cap[n] : 0.0;
-    }
-  }
+    H.capT[n] = Q;
+  });
+  for_each_node_by_line(g, b, [&](const Idx<kDim>&, std::size_t n) {
+    H.dT[n] = H.cap[n] >= c_min ? dt * H.capT[n] / H.cap[n] : 0.0;
+  });
 }
 
 }  // namespace smpm::kern

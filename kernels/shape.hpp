@@ -13,12 +13,18 @@ namespace smpm::kern {
 // per axis vanishes on nodes), so APIC takes C from the gradient; the others use C = B D^-1
 // with D = sum_i w_i (x_i - x_p)^2 per axis (h^2/4 quadratic, h^2/3 cubic).
 
+// What each shape declares besides its name and eval(): N nodes per axis, whether APIC takes C
+// from the gradient, and whether D = sum_i w_i (x_i - x_p)^2 is the same everywhere.
+template <int Nodes, bool ApicGradient, bool ConstantD>
+struct ShapeTraits {
+  static constexpr int N = Nodes;
+  static constexpr bool apic_gradient = ApicGradient;
+  static constexpr bool constant_D = ConstantD;
+};
+
 // Linear hat (classic MPM, Sulsky 1994). Support 2 nodes.
-struct Linear {
-  static constexpr int N = 2;
-  static constexpr bool apic_gradient = true;
+struct Linear : ShapeTraits<2, true, false> {
   static constexpr const char* name = "linear";
-  static constexpr bool constant_D = false;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(t);
     const double f = t - b;
@@ -32,11 +38,8 @@ struct Linear {
 
 // Undeformed GIMP (Bardenhagen & Kober 2004). lp = half particle width in grid units
 // (0 < lp <= 0.5). Support 1 + lp on each side: up to 3 nodes.
-struct UGIMP {
-  static constexpr int N = 3;
-  static constexpr bool apic_gradient = false;
+struct UGIMP : ShapeTraits<3, false, false> {
   static constexpr const char* name = "ugimp";
-  static constexpr bool constant_D = false;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   static inline void one(double d, double lp, double& w, double& dw) {
     const double a = std::fabs(d);
     const double s = d < 0.0 ? -1.0 : 1.0;
@@ -67,11 +70,8 @@ struct UGIMP {
 };
 
 // Quadratic B-spline. Support 3 nodes.
-struct QuadraticBSpline {
-  static constexpr int N = 3;
-  static constexpr bool apic_gradient = false;
+struct QuadraticBSpline : ShapeTraits<3, false, true> {
   static constexpr const char* name = "quadratic";
-  static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(t - 0.5);
     const double f = t - b;  // in [0.5, 1.5)
@@ -87,11 +87,8 @@ struct QuadraticBSpline {
 };
 
 // Cubic B-spline. Support 4 nodes.
-struct CubicBSpline {
-  static constexpr int N = 4;
-  static constexpr bool apic_gradient = false;
+struct CubicBSpline : ShapeTraits<4, false, true> {
   static constexpr const char* name = "cubic";
-  static constexpr bool constant_D = true;  // D = sum_i w_i (x_i - x_p)^2 the same everywhere
   SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(t) - 1.0;
     const double f = t - b;  // in [1, 2)

@@ -159,6 +159,30 @@ inline NodeBox real_nodes(const GridGeom& g, const NodeBox& b) {
   return r;
 }
 
+// Every node of box b, line by line along axis 0, the lines shared out over the threads (omp
+// parallel for, static; a line's nodes in order on one thread): node(acc, i, n) for node i at
+// storage index n, then line_end(acc, line) with the line's storage index (GridGeom::line). acc
+// (an Acc per line, value-initialized) carries the line's sums: wall reactions, contact losses.
+template <class Acc, class Node, class LineEnd>
+inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& node, LineEnd&& line_end) {
+  const int lines = b.lines();
+#pragma omp parallel for schedule(static)
+  for (int r = 0; r < lines; ++r) {
+    Idx<kDim> i = b.line_start(r);
+    const int line = g.line(i);
+    Acc acc{};
+    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) node(acc, static_cast<const Idx<kDim>&>(i), g.node(i));
+    line_end(acc, line);
+  }
+}
+// The same without per-line sums: node(i, n).
+template <class Node>
+inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& node) {
+  struct None {};
+  for_each_node_by_line<None>(
+      g, b, [&](None&, const Idx<kDim>& i, std::size_t n) { node(i, n); }, [](None&, int) {});
+}
+
 // Particle fields the transfer kernels read or write, one array per component: position and
 // velocity by axis, the stress deviator by symmetric component (kernels/tensor.hpp's order; at
 // D = 2, s_zz = -(s_xx + s_yy)), L and C row major. Total stress = s - p I.
