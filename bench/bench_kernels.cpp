@@ -65,15 +65,10 @@ Material bench_material() {  // aluminium-like, linear elastic
 Material shock_material() {
   Material m = bench_material();
   m.name = "aluminium";
-  m.eos = EosKind::MieGruneisen;
-  m.strength = StrengthKind::VonMises;
+  m.eos = MieGruneisenModel{5350.0, 1.34, 2.0};
+  m.strength = VonMisesModel{120e6, 384e6};
   m.E = 69e9;
   m.nu = 0.33;
-  m.c0 = 5350.0;
-  m.s = 1.34;
-  m.gamma0 = 2.0;
-  m.Y0 = 120e6;
-  m.H = 384e6;
   m.cv = 880.0;
   return m;
 }

@@ -88,9 +88,7 @@ static double solid_volume(const Particles& P, std::size_t i, const Material& ma
   bool fractured = P.p[i] == 0.0;
   for (int k = 0; k < kern::sym_size(kern::kDim); ++k) fractured = fractured && P.dev(k)[i] == 0.0;
   if (!fractured || mat.rho0 <= 0.0) return P.V[i];
-  const double rho_zp = mat.eos == EosKind::MieGruneisen && !P.e.empty()
-                            ? mat.mie_gruneisen().zero_pressure_density(P.e[i])
-                            : mat.rho0;
+  const double rho_zp = !P.e.empty() ? mat.zero_pressure_density(P.e[i]) : mat.rho0;
   // e past C / (Gamma rho0) (about 1.4e7 J/kg for Al) leaves the tension branch no zero-pressure
   // density: such a point holds all its V
   return rho_zp > 0.0 ? std::min(P.V[i], P.m[i] / rho_zp) : P.V[i];

@@ -256,7 +256,7 @@ toml::table body_json(const Scene& scene, std::size_t k) {
                  {"voids", static_cast<int64_t>(b.voids)}};
   const Material& m = scene.materials[scene.body_material[k]];
   const double up = std::hypot(b.velocity[0], b.velocity[1]);
-  if (m.eos != EosKind::MieGruneisen || up <= 0.0) return bt;
+  if (!m.has_hugoniot() || up <= 0.0) return bt;
   // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
   const auto h = hugoniot(m, up);
   if (h.in_range)
@@ -389,7 +389,7 @@ std::string describe_scene(const Scene& sc) {
     const auto& b = sc.bodies[k];
     const Material& m = sc.materials[sc.body_material[k]];
     const double up = std::hypot(b.velocity[0], b.velocity[1]);
-    if (m.eos != EosKind::MieGruneisen || up <= 0.0) continue;
+    if (!m.has_hugoniot() || up <= 0.0) continue;
     const auto h = hugoniot(m, up);
     if (!h.in_range) {
       o << "  " << b.name << " stopped from " << up << " m/s: beyond the range of the EOS's dense Hugoniot "

@@ -33,24 +33,15 @@ kern::Wall wall_kind(const std::string& s) {
 Material read_material(CaseReader r, const std::string& name, const toml::table* check_only = nullptr) {
   Material m;
   m.name = name;
-  const std::string eos = r.choice("eos", eos_names(), "linear");
-  const std::string strength = r.choice("strength", strength_names(), "elastic");
-  m.eos = eos == "mie_gruneisen" ? EosKind::MieGruneisen : EosKind::Linear;
-  m.strength = strength == "none" ? StrengthKind::None
-               : strength == "von_mises" ? StrengthKind::VonMises
-                                         : StrengthKind::Elastic;
+  const std::string eos = r.choice("eos", model_names<EosModel>(), "linear");
+  const std::string strength = r.choice("strength", model_names<StrengthModel>(), "elastic");
+  m.eos = model_named<EosModel>(eos);
+  m.strength = model_named<StrengthModel>(strength);
   m.rho0 = r.quantity("density", kDensity, 1e-6, 1e6);
   m.E = r.quantity("youngs_modulus", kStress, 1e-12, 1e15);
   m.nu = r.number("poisson_ratio", 0.0, 0.499);
-  if (m.eos == EosKind::MieGruneisen) {
-    m.c0 = r.quantity("bulk_sound_speed", kVelocity, 1e-6, 1e6);
-    m.s = r.number("hugoniot_slope", 0.0, 10.0);
-    m.gamma0 = r.number("gruneisen_gamma", 0.0, 10.0);
-  }
-  if (m.strength == StrengthKind::VonMises) {
-    m.Y0 = r.quantity("yield_stress", kStress, 0.0, 1e15);
-    m.H = r.quantity("hardening_modulus", kStress, 0.0, 1e15);
-  }
+  std::visit([&r](auto& model) { model.read(r); }, m.eos);
+  std::visit([&r](auto& model) { model.read(r); }, m.strength);
   m.spall_strength = r.quantity("spall_strength", kStress, 0.0, 1e15, 0.0);
   m.cv = r.quantity("specific_heat", kSpecificHeat, 0.0, 1e8, 0.0);
   m.conductivity = r.quantity("thermal_conductivity", kConductivity, 0.0, 1e6, 0.0);

@@ -233,7 +233,9 @@ void Simulation::close_cracks() {
     with_material(mat, [&](const auto& eos, const auto& str) {
       const auto r = kern::close_cracks(A, order_.data(), cell_start_.data(), grid_.geom.num_keys(), prm, eos,
                                         [&](double rho, double P, std::uint32_t i) {
-                                          return kern::signal_speed(eos, str, rho, P, pv.v[0][i], pv.v[1][i]);
+                                          double v2 = 0.0;
+                                          for (int d = 0; d < kern::kDim; ++d) v2 += pv.v[d][i] * pv.v[d][i];
+                                          return kern::signal_speed(eos, str, rho, P, v2);
                                         });
       max_speed_ = std::max(max_speed_, r.max_speed);
     });
@@ -508,7 +510,9 @@ Simulation::Energy Simulation::energy() const {
       e.internal += P_.m[p] * P_.e[p];
     } else {
       const Material& mat = materials_[body_material_[P_.body[p]]];
-      e.internal += P_.V[p] * mat.strain_energy_density(P_.s[0][p], P_.s[1][p], P_.s[2][p], P_.p[p]);
+      kern::Sym<kern::kDim> s;
+      for (int k = 0; k < kern::Sym<kern::kDim>::K; ++k) s[k] = P_.dev(k)[p];
+      e.internal += P_.V[p] * mat.strain_energy_density(s, P_.p[p]);
     }
   }
   return e;

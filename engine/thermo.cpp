@@ -11,8 +11,10 @@ constexpr int kTable = 8192;
 }
 
 Thermo::Thermo(const Material& m) : m_(m) {
-  if (m.eos != EosKind::MieGruneisen) return;  // simple temperature only
-  const auto eos = m.mie_gruneisen();
+  const auto form = m.gruneisen();
+  if (!form) return;  // simple temperature only
+  const kern::MieGruneisenEos eos = *form;
+  gamma0_ = eos.gamma0;
   if (m.spall_strength > 0.0) rho_spall_ = m.rho0 * (1.0 - m.spall_strength / eos.C);  // cold P = -spall
   const double V0 = 1.0 / m.rho0;
   d_ = (kEtaMax - kEtaMin) / (kTable - 1);
@@ -43,7 +45,7 @@ double Thermo::isentrope_energy(double rho) const {
 }
 
 double Thermo::isentrope_temperature(double rho) const {
-  return m_.T0 * std::exp(m_.gamma0 * (1.0 - m_.rho0 / rho));
+  return m_.T0 * std::exp(gamma0_ * (1.0 - m_.rho0 / rho));
 }
 
 double Thermo::temperature(double rho, double e, double stored) const {
@@ -77,8 +79,9 @@ HugoniotState jump_state(const Material& m, double rho00, double rho, double P) 
 }  // namespace
 
 HugoniotState hugoniot(const Material& m, double up) {
-  if (m.eos != EosKind::MieGruneisen) throw std::invalid_argument("hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
-  const auto eos = m.mie_gruneisen();
+  const auto form = m.gruneisen();
+  if (!form) throw std::invalid_argument("hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
+  const kern::MieGruneisenEos eos = *form;
   const double V0 = 1.0 / m.rho0;
   // On the Hugoniot e = P (V0 - V) / 2, so P = cold / (1 - gamma_rho (V0 - V) / 2); up^2 = P (V0 - V).
   auto state = [&](double rho, double& P) {
@@ -104,10 +107,10 @@ HugoniotState hugoniot(const Material& m, double up) {
 }
 
 HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
-  if (m.eos != EosKind::MieGruneisen)
-    throw std::invalid_argument("porous_hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
+  const auto form = m.gruneisen();
+  if (!form) throw std::invalid_argument("porous_hugoniot: material " + m.name + " has no Mie-Grueneisen EOS");
   if (!(porosity >= 0.0 && porosity < 1.0)) throw std::invalid_argument("porous_hugoniot: porosity must be in [0, 1)");
-  const auto eos = m.mie_gruneisen();
+  const kern::MieGruneisenEos eos = *form;
   const double rho00 = (1.0 - porosity) * m.rho0, V00 = 1.0 / rho00;
   // f(rho) = P (V00 - V) - up^2 with P = cold / (1 - gamma_rho (V00 - V) / 2) (e on the Hugoniot)
   auto pressure = [&](double rho) {

@@ -28,6 +28,7 @@ class Thermo {
  private:
   Material m_;
   std::vector<double> es_;  // e_s at eta = kEtaMin + i d
+  double gamma0_ = 0.0;     // Grueneisen gamma at rho0 of the EOS's Mie-Grueneisen form
   double rho_spall_ = 0.0;  // density where the cold pressure reaches -spall_strength (0: none)
   double d_ = 0.0;
 };

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 
 #include "views.hpp"
 
@@ -74,36 +75,148 @@ struct MieGruneisenEos {
 
 // ---- strength parts --------------------------------------------------------------------------
 
-// Elastic trial step of the deviator: ds/dt = 2 G dev(D) + W s - s W (Jaumann), plane strain
-// (D_zz = 0, s_zz = -(s_xx + s_yy)); w = W_xy = (L_xy - L_yx) / 2. Written out in scalars: with
-// W = [0 w; -w 0], W s - s W = [2 w s_xy, w (s_yy - s_xx); same, -2 w s_xy], and the in-plane
-// part of dev(D) subtracts tr(D) / 3 from each diagonal entry. (tests/test_material.cpp checks
-// it against the 2x2 matrix expression in Eigen.) Scalars, not Eigen temporaries: inside the
-// particle loop GCC 12 kept the Eigen 2x2 matrices as stack temporaries (docs/performance.md).
-SMPM_INLINE void jaumann_trial(double G, double& sxx, double& syy, double& sxy, double dxx, double dyy, double dxy,
-                               double w, double dt) {
-  const double third_tr = (dxx + dyy) / 3.0, spin = w * (syy - sxx), g2 = 2.0 * G;
-  const double nxx = sxx + dt * (g2 * (dxx - third_tr) + 2.0 * w * sxy);
-  const double nyy = syy + dt * (g2 * (dyy - third_tr) - 2.0 * w * sxy);
-  const double nxy = sxy + dt * (g2 * dxy + spin);
-  sxx = nxx;
-  syy = nyy;
-  sxy = nxy;
+// A strength part maps the deviator s of a point over one step to the updated one:
+//   StrengthResult<D> update(Sym<D> s, StrainRate<D> k, double dt, StrengthState st) const
+// D-generic kinematics (the rate of deformation and the spin) and a state with slots for the
+// plastic strain, the temperature and the strain rate; everything by value (a pointer to a
+// local or an output reference passed into the inlined update keeps GCC 12's particle loop
+// scalar). `plastic` says whether the part reads and writes st.epsp and returns plastic work.
+
+// The rate of deformation D = sym(L) and the spin W = (L - L^T) / 2 of a step.
+template <int D>
+struct StrainRate {
+  Sym<D> d;
+  Spin<D> w;
+};
+
+// The point state a strength part reads: the constitutive loop fills epsp for a plastic part;
+// T and rate are slots for temperature- and rate-dependent parts.
+struct StrengthState {
+  double epsp = 0.0;  // equivalent plastic strain [-]
+  double T = 0.0;     // temperature [K]
+  double rate = 0.0;  // equivalent strain rate [1/s]
+};
+
+template <int D>
+struct StrengthResult {
+  Sym<D> s;            // the updated deviator [Pa]
+  StrengthState st;    // the updated state
+  double work = 0.0;   // plastic work per unit volume [J/m^3]
+};
+
+// each<N>(f): f(std::integral_constant<int, 0>{}), ..., f(std::integral_constant<int, N - 1>{}).
+// The per-point loops over axes and components: with the index a compile-time constant in each
+// call, a point's small aggregates stay in registers (a loop index into a local array put it on
+// the stack, and GCC 12 then kept the particle loop scalar).
+template <int N, class F>
+SMPM_INLINE void each(F&& f) {
+  [&]<int... I>(std::integer_sequence<int, I...>) __attribute__((always_inline)) {
+    (f(std::integral_constant<int, I>{}), ...);
+  }(std::make_integer_sequence<int, N>{});
 }
 
-// sqrt(3 J2) of a plane-strain deviator (s_zz = -(s_xx + s_yy)).
-SMPM_INLINE double von_mises(double sxx, double syy, double sxy) {
-  const double szz = -(sxx + syy);
-  return std::sqrt(1.5 * (sxx * sxx + syy * syy + 2.0 * sxy * sxy + szz * szz));
+// Entry (A, B) of a symmetric tensor; W_AB of a spin (A != B).
+template <int A, int B, int D>
+SMPM_INLINE double entry(const Sym<D>& s) {
+  constexpr int k = sym_index(D, A, B);
+  return s[k];
+}
+template <int A, int B, int D>
+SMPM_INLINE double spin_at(const Spin<D>& w) {
+  constexpr int k = sym_index(D, A, B) - D;
+  if constexpr (A < B) return w[k];
+  else return -w[k];
+}
+
+// tr(s), summed in axis order.
+template <int D>
+SMPM_INLINE double trace(const Sym<D>& s) {
+  double t = s[0];
+  each<D - 1>([&](auto d) __attribute__((always_inline)) { t += s[d + 1]; });
+  return t;
+}
+
+// The rate of deformation and the spin of a velocity gradient, each entry 0.5 (L_ab +- L_ba)
+// (the diagonal L_aa itself).
+template <int D>
+SMPM_INLINE StrainRate<D> strain_rate(const Mat<D>& L) {
+  StrainRate<D> k;
+  each<Sym<D>::K>([&](auto i) __attribute__((always_inline)) {
+    constexpr int a = sym_row(D, i), b = sym_col(D, i);
+    if constexpr (a == b) {
+      k.d[i] = L(a, a);
+    } else {
+      k.d[i] = 0.5 * (L(a, b) + L(b, a));
+      k.w[i - D] = 0.5 * (L(a, b) - L(b, a));
+    }
+  });
+  return k;
+}
+
+// Component K = (a, b) of the corotational rate W s - s W of a symmetric s:
+//   a == b   sum_{c != a} 2 W_ac s_ac
+//   a != b   W_ab (s_bb - s_aa) + sum_{c != a, b} (W_ac s_cb + W_bc s_ac)
+// At D = 2, W = [0 w; -w 0]: 2 w s_xy, -2 w s_xy and w (s_yy - s_xx).
+template <int K, int D>
+SMPM_INLINE double corotation(const Sym<D>& s, const Spin<D>& w) {
+  constexpr int a = sym_row(D, K), b = sym_col(D, K);
+  if constexpr (a == b) {
+    constexpr int c0 = a == 0 ? 1 : 0;  // the sum starts from its first term
+    double r = 2.0 * spin_at<a, c0>(w) * entry<a, c0>(s);
+    each<D>([&](auto c) __attribute__((always_inline)) {
+      if constexpr (c != a && c != c0) r += 2.0 * spin_at<a, c>(w) * entry<a, c>(s);
+    });
+    return r;
+  } else {
+    double r = spin_at<a, b>(w) * (entry<b, b>(s) - entry<a, a>(s));
+    each<D>([&](auto c) __attribute__((always_inline)) {
+      if constexpr (c != a && c != b) r += spin_at<a, c>(w) * entry<c, b>(s) + spin_at<b, c>(w) * entry<a, c>(s);
+    });
+    return r;
+  }
+}
+
+// Elastic trial step of the deviator: ds/dt = 2 G dev(D) + W s - s W (Jaumann). dev(D)
+// subtracts tr(D) / 3 from each diagonal entry: at D = 2 (plane strain, D_zz = 0) the in-plane
+// part of the 3D deviator, whose out-of-plane entry s_zz = -(s_xx + s_yy) is the trace-free
+// closure (tests/test_material.cpp checks the step against the matrix expression in Eigen).
+// Scalars, not Eigen temporaries: inside the particle loop GCC 12 kept Eigen matrices as stack
+// temporaries (docs/performance.md).
+template <int D>
+SMPM_INLINE Sym<D> jaumann_trial(double G, Sym<D> s, StrainRate<D> k, double dt) {
+  const double third_tr = trace(k.d) / 3.0, g2 = 2.0 * G;
+  Sym<D> n;
+  each<Sym<D>::K>([&](auto i) __attribute__((always_inline)) {
+    const double rot = corotation<i>(s, k.w);
+    if constexpr (i < D) n[i] = s[i] + dt * (g2 * (k.d[i] - third_tr) + rot);
+    else n[i] = s[i] + dt * (g2 * k.d[i] + rot);
+  });
+  return n;
+}
+
+// sqrt(3 J2) of a deviator; at D = 2 with the out-of-plane entry s_zz = -(s_xx + s_yy).
+template <int D>
+SMPM_INLINE double von_mises(Sym<D> s) {
+  double sum = s[0] * s[0];
+  each<Sym<D>::K - 1>([&](auto j) __attribute__((always_inline)) {
+    constexpr int k = j + 1;
+    if constexpr (k < D) sum += s[k] * s[k];
+    else sum += 2.0 * s[k] * s[k];
+  });
+  if constexpr (D == 2) {
+    const double closure = -(s[0] + s[1]);  // the out-of-plane entry
+    sum += closure * closure;
+  }
+  return std::sqrt(1.5 * sum);
 }
 
 // No shear strength: the deviator stays zero.
 struct NoStrength {
   static constexpr bool plastic = false;
   double shear_modulus() const { return 0.0; }
-  SMPM_INLINE double update(double& sxx, double& syy, double& sxy, double, double, double, double, double, double*) const {
-    sxx = syy = sxy = 0.0;
-    return 0.0;
+  template <int D>
+  SMPM_INLINE StrengthResult<D> update(Sym<D>, StrainRate<D>, double, StrengthState st) const {
+    return {Sym<D>{}, st, 0.0};
   }
 };
 
@@ -111,25 +224,24 @@ struct ElasticStrength {
   static constexpr bool plastic = false;
   double G = 0.0;
   double shear_modulus() const { return G; }
-  SMPM_INLINE double update(double& sxx, double& syy, double& sxy, double dxx, double dyy, double dxy, double w, double dt,
-                double*) const {
-    jaumann_trial(G, sxx, syy, sxy, dxx, dyy, dxy, w, dt);
-    return 0.0;
+  template <int D>
+  SMPM_INLINE StrengthResult<D> update(Sym<D> s, StrainRate<D> k, double dt, StrengthState st) const {
+    return {jaumann_trial(G, s, k, dt), st, 0.0};
   }
 };
 
 // von Mises with linear isotropic hardening, radial return: Y = Y0 + H eps_p; a trial state with
 // sqrt(3 J2) > Y flows by d_eps_p = (sqrt(3 J2) - Y) / (3 G + H) and is scaled back onto the
-// hardened surface. Returns the plastic work per unit volume, Y_new d_eps_p.
+// hardened surface. The work is the plastic work per unit volume, Y_new d_eps_p.
 struct VonMisesStrength {
   static constexpr bool plastic = true;
   double G = 0.0, Y0 = 0.0, H = 0.0;
   double shear_modulus() const { return G; }
-  SMPM_INLINE double update(double& sxx, double& syy, double& sxy, double dxx, double dyy, double dxy, double w, double dt,
-                double* epsp) const {
-    jaumann_trial(G, sxx, syy, sxy, dxx, dyy, dxy, w, dt);
-    const double q = von_mises(sxx, syy, sxy);
-    const double Y = Y0 + H * *epsp;
+  template <int D>
+  SMPM_INLINE StrengthResult<D> update(Sym<D> s, StrainRate<D> k, double dt, StrengthState st) const {
+    Sym<D> t = jaumann_trial(G, s, k, dt);
+    const double q = von_mises(t);
+    const double Y = Y0 + H * st.epsp;
     // branch-free: an elastic step has deps = 0 and f = 1; the divisions are computed for every
     // point (a division inside a conditional keeps GCC from if-converting the loop)
     const bool flows = q > Y;
@@ -138,11 +250,9 @@ struct VonMisesStrength {
     const double Ynew = Y + H * deps;
     const double ratio = Ynew / (flows ? q : 1.0);
     const double f = flows ? ratio : 1.0;
-    sxx *= f;
-    syy *= f;
-    sxy *= f;
-    *epsp += deps;
-    return Ynew * deps;
+    each<Sym<D>::K>([&](auto i) __attribute__((always_inline)) { t[i] *= f; });
+    st.epsp += deps;
+    return {t, st, Ynew * deps};
   }
 };
 
@@ -169,11 +279,11 @@ struct ConstitutiveParams {
   bool midstep = false;
 };
 
-// Fastest signal speed of a particle: longitudinal wave speed plus |v|.
+// Fastest signal speed of a particle: longitudinal wave speed plus |v|, v2 = |v|^2.
 template <class Eos, class Strength>
-SMPM_INLINE double signal_speed(const Eos& eos, const Strength& str, double rho, double P, double vx, double vy) {
+SMPM_INLINE double signal_speed(const Eos& eos, const Strength& str, double rho, double P, double v2) {
   const double c = std::sqrt((eos.bulk_modulus(rho, P) + 4.0 / 3.0 * str.shear_modulus()) / rho);
-  return c + std::sqrt(vx * vx + vy * vy);
+  return c + std::sqrt(v2);
 }
 
 // Only particles with select[body[p]] != 0 are updated (null select: all particles).
@@ -193,21 +303,221 @@ struct ConstitutiveResult {
   }
 };
 
+// ---- steps of the update of one point (constitutive_range) ---------------------------------
+
+// det(I + dt L): the volume ratio of the step.
+template <int D>
+SMPM_INLINE double volume_ratio(Mat<D> L, double dt) {
+  static_assert(D == 2 || D == 3, "two or three axes");
+  if constexpr (D == 2) {
+    return (1.0 + dt * L(0, 0)) * (1.0 + dt * L(1, 1)) - dt * dt * L(0, 1) * L(1, 0);
+  } else {
+    Mat<D> A;
+    each<D * D>([&](auto i) __attribute__((always_inline)) {
+      constexpr int r = i / D, c = i % D;
+      A(r, c) = (r == c ? 1.0 : 0.0) + dt * L(r, c);
+    });
+    return A(0, 0) * (A(1, 1) * A(2, 2) - A(1, 2) * A(2, 1)) - A(0, 1) * (A(1, 0) * A(2, 2) - A(1, 2) * A(2, 0)) +
+           A(0, 2) * (A(1, 0) * A(2, 1) - A(1, 1) * A(2, 0));
+  }
+}
+
+// s : d of two symmetric tensors (each off-diagonal entry counted twice), in component order.
+template <int D>
+SMPM_INLINE double contract(Sym<D> s, Sym<D> d) {
+  double r = s[0] * d[0];
+  each<Sym<D>::K - 1>([&](auto j) __attribute__((always_inline)) {
+    constexpr int k = j + 1;
+    if constexpr (k < D) r += s[k] * d[k];
+    else r += 2.0 * s[k] * d[k];
+  });
+  return r;
+}
+
+// A point's state at the start of the step, read from the range's arrays.
+template <int D>
+struct PointIn {
+  Mat<D> L;      // velocity gradient (the updated one)
+  Sym<D> dmid;   // mid-step rate of deformation (Midstep only)
+  Sym<D> s;      // deviator
+  double v2;     // |v|^2
+  double m, V0, P0;
+  double e0 = 0.0, q0 = 0.0;  // energy, viscous pressure (when tracked)
+  StrengthState st;           // plastic strain (plastic strength parts)
+};
+
+// The arrays of a range of points: copies of the views, which the stores of the particle loop
+// cannot alias (read through the caller's references, GCC reloads the pointers for every point
+// and keeps the loop scalar). Point first + p of the particles; L.at(r, c)[p] its gradient.
+struct RangeArrays {
+  ParticleView P;
+  ConstitutiveState S;
+  Gradient L;
+  Selection sel;
+  std::size_t first;
+};
+
+template <bool HasE, bool HasQ, bool Plastic, bool Midstep, int D>
+SMPM_INLINE PointIn<D> load_point(const RangeArrays& A, std::size_t p) {
+  const std::size_t i = A.first + p;
+  PointIn<D> in;
+  each<D * D>([&](auto rc) __attribute__((always_inline)) {
+    constexpr int r = rc / D, c = rc % D;
+    in.L(r, c) = A.L.at(r, c)[p];
+  });
+  each<Sym<D>::K>([&](auto k) __attribute__((always_inline)) {
+    in.s[k] = A.P.dev(k)[i];
+    if constexpr (Midstep) in.dmid[k] = A.L.work(k)[p];
+  });
+  in.v2 = A.P.vel(0)[i] * A.P.vel(0)[i];
+  each<D - 1>([&](auto d) __attribute__((always_inline)) { in.v2 += A.P.vel(d + 1)[i] * A.P.vel(d + 1)[i]; });
+  in.m = A.P.m[i];
+  in.V0 = A.P.V[i];
+  in.P0 = A.P.p[i];
+  if constexpr (HasE) in.e0 = A.S.e[i];
+  if constexpr (HasQ) in.q0 = A.S.q[i];
+  if constexpr (Plastic) in.st.epsp = A.S.epsp[i];
+  return in;
+}
+
+// The viscous pressure q = rho l (c_Q l tr(D)^2 - c_L c tr(D)) in compression, and the signal
+// speed it adds, 2 c_Q l |tr(D)|.
+struct Viscosity {
+  double q = 0.0, speed = 0.0;
+};
+template <class Eos>
+SMPM_INLINE Viscosity viscosity(const Eos& eos, ConstitutiveParams prm, double rho, double P0, double trD) {
+  const double l = prm.av_length, cQ = prm.av_quadratic, cL = prm.av_linear;
+  const double c = std::sqrt(eos.bulk_modulus(rho, P0) / rho);
+  const bool comp = trD < 0.0;
+  return {comp ? rho * l * (cQ * l * trD * trD - cL * c * trD) : 0.0, comp ? 2.0 * cQ * l * -trD : 0.0};
+}
+
+// The energy with the mid-step rate: the work of the stress the scatter used (deviator, pressure
+// and viscous pressure at the start of the step, volume V0) over the step's mid-step rate,
+// dt V0 sigma : D_mid. It is exactly minus the work of the internal forces on the grid,
+// dt f_i . v_i with the mid-step velocity the gather formed D_mid from (kern::g2p_particle):
+// kinetic plus internal energy is conserved by the step. The volume, the deviator and the
+// viscosity take the updated L (symplectic; with D_mid there too round-off grew without bound
+// in thin ligaments, docs/method.md). A point that fractures takes the work of the stress it
+// had, this same one.
+template <int D>
+SMPM_INLINE double midstep_energy(PointIn<D> in, double dt) {
+  const double sD = contract(in.s, in.dmid) - (in.P0 + in.q0) * trace(in.dmid);
+  return in.e0 + dt * in.V0 * sD / in.m;
+}
+
+// The energy with the updated L (q.midstep false): deviatoric work with the time-centred stress
+// and mid-step volume, pressure work with P at mid-step, solved exactly (P is linear in e:
+// P = cold(rho) + Gamma rho e, Gamma rho constant); a point that fractures takes the work of
+// the stress it had, the centred mean of the old stress and zero (not the trial deviator, which
+// never acts: with it, expanding debris gained energy without bound).
+template <class Eos, int D>
+SMPM_INLINE double centred_energy(const Eos& eos, ConstitutiveParams prm, PointIn<D> in, Sym<D> s1, Sym<D> d,
+                                  double V, double rho, double cold, double qv) {
+  const double V0 = in.V0, m = in.m, dt = prm.dt, dV = V - V0;
+  Sym<D> sc;
+  each<Sym<D>::K>([&](auto k) __attribute__((always_inline)) { sc[k] = in.s[k] + s1[k]; });
+  const double sDc = 0.5 * contract(sc, d);
+  const double e_c = (in.e0 + (dt * 0.5 * (V0 + V) * sDc - (0.5 * (in.P0 + cold) + qv) * dV) / m) /
+                     (1.0 + 0.5 * eos.gamma_rho() * dV / m);
+  const double sD_fr = 0.5 * contract(in.s, d);
+  const double e_fr = in.e0 + (dt * 0.5 * (V0 + V) * sD_fr - 0.5 * in.P0 * dV) / m;
+  const bool fr = (cold + eos.gamma_rho() * e_c < prm.p_min) | (rho < prm.rho_min);
+  return fr ? e_fr : e_c;
+}
+
+// The new energy (zero when not tracked) and pressure P = EOS(rho, e).
+struct EnergyPressure {
+  double e = 0.0, P = 0.0;
+};
+template <bool HasE, bool Midstep, class Eos, int D>
+SMPM_INLINE EnergyPressure energy_pressure(const Eos& eos, ConstitutiveParams prm, PointIn<D> in, Sym<D> s1,
+                                           Sym<D> d, double V, double rho, double qv) {
+  if constexpr (HasE) {
+    const double cold = eos.cold(rho);
+    double e;
+    if constexpr (Midstep) e = midstep_energy(in, prm.dt);
+    else e = centred_energy(eos, prm, in, s1, d, V, rho, cold, qv);
+    return {e, cold + eos.gamma_rho() * e};
+  } else {
+    return {0.0, eos.pressure(rho, 0.0)};
+  }
+}
+
+// ---- the loop -------------------------------------------------------------------------------
+
+// The volume of point p of the range after the step.
+SMPM_INLINE double step_volume(const RangeArrays& A, std::size_t p, const ConstitutiveParams& prm) {
+  constexpr int D = kDim;
+  Mat<D> L;
+  each<D * D>([&](auto rc) __attribute__((always_inline)) {
+    constexpr int r = rc / D, c = rc % D;
+    L(r, c) = A.L.at(r, c)[p];
+  });
+  const double jinc = volume_ratio(L, prm.dt), V0 = A.P.V[A.first + p], m = A.P.m[A.first + p];
+  return V0 * ((m < prm.rho_min * V0) ? std::min(jinc, 1.0) : jinc);
+}
+
+// The update of point p of the range, V its new volume (step_volume), its state loaded, updated
+// and stored back (if `on`, else kept); its signal speed, 0 unless `on`. A function of its own:
+// the point's aggregates are its locals, not the simd loop's (GCC 12 makes aggregates of the
+// loop body per-lane stack arrays, and keeps the loop scalar).
+template <bool HasE, bool HasQ, bool HasWp, bool Midstep, class Eos, class Strength>
+SMPM_INLINE double update_point(const RangeArrays& A, std::size_t p, bool on, double V, const ConstitutiveParams& prm,
+                                const Eos& eos, const Strength& str, double c_fractured) {
+  constexpr int D = kDim;
+  const std::size_t i = A.first + p;
+  const PointIn<D> in = load_point<HasE, HasQ, Strength::plastic, Midstep, D>(A, p);
+  const double rho = in.m / V;
+  const StrainRate<D> k = strain_rate(in.L);
+  const StrengthResult<D> sr = str.update(in.s, k, prm.dt, in.st);
+  Viscosity visc;
+  if constexpr (HasQ) visc = viscosity(eos, prm, rho, in.P0, trace(k.d));
+  const EnergyPressure ep = energy_pressure<HasE, Midstep>(eos, prm, in, sr.s, k.d, V, rho, visc.q);
+  const bool fractured = (ep.P < prm.p_min) | (rho < prm.rho_min);
+  const double vabs = std::sqrt(in.v2);
+  const double sig = fractured ? c_fractured + vabs : signal_speed(eos, str, rho, ep.P, in.v2) + visc.speed;
+  A.P.V[i] = on ? V : in.V0;
+  each<Sym<D>::K>([&](auto k) __attribute__((always_inline)) {
+    A.P.dev(k)[i] = on ? (fractured ? 0.0 : sr.s[k]) : in.s[k];
+  });
+  A.P.p[i] = on ? (fractured ? 0.0 : ep.P) : in.P0;
+  if constexpr (Strength::plastic) A.S.epsp[i] = on ? sr.st.epsp : in.st.epsp;
+  if constexpr (HasE) A.S.e[i] = on ? ep.e : in.e0;
+  if constexpr (HasQ) A.S.q[i] = on ? (fractured ? 0.0 : visc.q) : in.q0;
+  if constexpr (HasWp) A.S.wp[i] += on ? sr.work * V / in.m : 0.0;
+  return on ? sig : 0.0;
+}
+
+// Per point and step: the volume (debris, a point already expanded below rho_min, so fractured
+// and stress-free, does not expand further: an isolated point keeps its APIC affine velocity,
+// and its volume grew without bound, which read as solid in every volume sum (open porosity,
+// the weld's volume fraction, uGIMP's domains); it still compresses, so it carries pressure
+// again once packed back above rho_min), the strength part's deviator, the viscosity, the energy
+// and pressure, then fracture: a point with tension below p_min (spall) or expanded below
+// rho_min carries neither tension nor shear from now on (the elastic shear energy held in the
+// deviator is released: energy.csv shows it), and no artificial viscosity either (a fractured
+// point is debris, often alone in its cells, whose velocity gradient is noise; its viscous signal
+// speed once stalled a porous run at dt = 7e-4 ns). Unselected points keep their state.
+//
 // The loop body is branch-free (both sides of every test computed, one selected, no division
 // inside a conditional), everything in it inlined, the optional state a compile-time choice, and
 // the loop `omp simd`: GCC 12 vectorizes it across particles (8 doubles per AVX-512 vector).
 // What that needs, each found with -fopt-info-vec-missed: -fno-math-errno (CMakeLists.txt;
 // otherwise every sqrt is a call that may set errno, "control flow in loop"); `simd` on the
 // pragma (a max reduction over doubles is not vectorized without it, NaN semantics); the
-// parameters read into locals before the loop (a load under a condition through the params
-// reference is an unsupported masked load); bitwise | and & on the tests, not || and &&
-// (short-circuit masks did not convert). The vector body and the remainder do the same
-// operations in the same order, each rounded as written (-ffp-contract=off), so a result does
-// not depend on which one processes a particle, nor on where a block or a thread's share
-// begins: bitwise the same for any thread count and block split (tests/test_contact.cpp and
-// tests/test_elastic.cpp, "determinism").
+// parameters and arrays copied into locals before the loop (a load under a condition through
+// the params reference is an unsupported masked load); no aggregate in the loop body itself (see
+// update_point), small aggregates passed to the steps and returned by value (a pointer to a
+// local or an output reference keeps the loop scalar); bitwise
+// | and & on the tests, not || and && (short-circuit masks did not convert). The vector body and
+// the remainder do the same operations in the same order, each rounded as written
+// (-ffp-contract=off), so a result does not depend on which one processes a particle, nor on
+// where a block or a thread's share begins: bitwise the same for any thread count and block
+// split (tests/test_contact.cpp and tests/test_elastic.cpp, "determinism").
 //
-// Points [first, last) on the calling thread; L.at(0, 0)[i] ... is the gradient of point first + i.
+// Points [first, last) on the calling thread; L.at(r, c)[i] is the gradient of point first + i.
 template <bool Selective, bool HasE, bool HasQ, bool HasWp, bool Midstep, class Eos, class Strength>
 ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
                                       std::size_t first, std::size_t last, const ConstitutiveParams& q,
@@ -215,121 +525,16 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   const std::size_t cnt = last - first;
   double vmax = 0.0;
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(cnt);
-  const double dt = q.dt, l = q.av_length, p_min = q.p_min, rho_min = q.rho_min;
-  const double cQ = q.av_quadratic, cL = q.av_linear;
+  const ConstitutiveParams prm = q;
   // a fractured point's signal speed: the sound speed at rest (its stress is zero)
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
-  // every array through a local restrict pointer to the range's first point: the view's
-  // members might alias the stores, so the compiler would reload them for every point
-  const double* __restrict Lxxp = L.at(0, 0);
-  const double* __restrict Lxyp = L.at(0, 1);
-  const double* __restrict Lyxp = L.at(1, 0);
-  const double* __restrict Lyyp = L.at(1, 1);
-  // the mid-step rate of the energy's work (Midstep; kern::g2p_blocks' heating pass writes it)
-  const double* __restrict Wxxp = Midstep ? L.work(0) : nullptr;
-  const double* __restrict Wyyp = Midstep ? L.work(1) : nullptr;
-  const double* __restrict Wxyp = Midstep ? L.work(2) : nullptr;
-  const double* __restrict mp = P.m + first;
-  const double* __restrict vxp = P.vel(0) + first;
-  const double* __restrict vyp = P.vel(1) + first;
-  double* __restrict Vp = P.V + first;
-  double* __restrict sxxp = P.dev(0) + first;
-  double* __restrict syyp = P.dev(1) + first;
-  double* __restrict sxyp = P.dev(2) + first;
-  double* __restrict pp = P.p + first;
-  double* __restrict ep = HasE ? S.e + first : nullptr;
-  double* __restrict qp = HasQ ? S.q + first : nullptr;
-  double* __restrict epspp = Strength::plastic ? S.epsp + first : nullptr;
-  double* __restrict wpp = HasWp ? S.wp + first : nullptr;
-  const std::uint8_t* __restrict bodyp = Selective ? sel.body + first : nullptr;
-  const std::uint8_t* __restrict selectp = sel.select;
+  const RangeArrays A{P, S, L, sel, first};
 #pragma omp simd reduction(max : vmax) reduction(min : bad)
   for (std::size_t p = 0; p < cnt; ++p) {
-    const bool on = !Selective || selectp[bodyp[p]];
-    const double lxx = Lxxp[p], lxy = Lxyp[p], lyx = Lyxp[p], lyy = Lyyp[p];
-    const double jinc = (1.0 + dt * lxx) * (1.0 + dt * lyy) - dt * dt * lxy * lyx;
-    const double V0 = Vp[p], m = mp[p];
-    // debris (a point already expanded below rho_min, so fractured, stress-free) does not expand
-    // further: an isolated point keeps its APIC affine velocity, and its volume grew without
-    // bound (rho 1e-4 kg/m^3 at the study's free top), which read as solid in every volume
-    // sum (open porosity, the weld's volume fraction, uGIMP's domains). It still compresses,
-    // so it carries pressure again once packed back above rho_min. No work either way: it has
-    // no stress.
-    const double V = V0 * ((m < rho_min * V0) ? std::min(jinc, 1.0) : jinc);
+    const bool on = !Selective || A.sel.select[A.sel.body[A.first + p]];
+    const double V = step_volume(A, p, prm);
     bad = std::min(bad, on & !(V > 0.0) ? static_cast<std::ptrdiff_t>(p) : static_cast<std::ptrdiff_t>(cnt));
-    const double rho = m / V;
-    const double dxy = 0.5 * (lxy + lyx), w = 0.5 * (lxy - lyx), trD = lxx + lyy;
-    const double a0 = sxxp[p], b0 = syyp[p], c0 = sxyp[p];
-    double sxx = a0, syy = b0, sxy = c0;
-    double epsp = 0.0;
-    if constexpr (Strength::plastic) epsp = epspp[p];
-    const double Wp = str.update(sxx, syy, sxy, lxx, lyy, dxy, w, dt, &epsp);
-    const double P0 = pp[p];
-    double qv = 0.0, qspeed = 0.0;
-    if constexpr (HasQ) {
-      const double c = std::sqrt(eos.bulk_modulus(rho, P0) / rho);
-      const bool comp = trD < 0.0;
-      qv = comp ? rho * l * (cQ * l * trD * trD - cL * c * trD) : 0.0;
-      qspeed = comp ? 2.0 * cQ * l * -trD : 0.0;
-    }
-    double Pn, e = 0.0;
-    const double dV = V - V0;
-    if constexpr (HasE) {
-      // the work of the stress the scatter used (deviator, pressure and viscous pressure at the
-      // start of the step, volume V0) over the step's mid-step rate: dt V0 sigma : D_mid. It is
-      // exactly minus the work of the internal forces on the grid, dt f_i . v_i with the
-      // mid-step velocity the gather formed D_mid from (kern::g2p_particle): kinetic plus
-      // internal energy is conserved by the step. The volume, the deviator and the viscosity
-      // take the updated L (symplectic; with D_mid there too round-off grew without bound in
-      // thin ligaments, docs/method.md). (The time-centred update this replaced, solved for P at
-      // mid-step, made the Hugoniot second order in dt but left the energy of the step
-      // unbalanced by O(dt^2) per node; at partly filled nodes of void faces that was a 4-10 %
-      // loss over a porous run.) A point that fractures takes the work of the stress it had,
-      // this same one.
-      const double e_old = ep[p], cold = eos.cold(rho);
-      if constexpr (Midstep) {
-        const double q0 = HasQ ? qp[p] : 0.0;
-        const double mxx = Wxxp[p], myy = Wyyp[p], mxy = Wxyp[p];
-        const double sD = a0 * mxx + b0 * myy + 2.0 * c0 * mxy - (P0 + q0) * (mxx + myy);
-        e = e_old + dt * V0 * sD / m;
-      } else {
-      // updated-velocity L (q.midstep false): deviatoric work with the time-centred stress and
-      // mid-step volume, pressure work with P at mid-step, solved exactly (P is linear in e:
-      // P = cold(rho) + Gamma rho e, Gamma rho constant); a point that fractures takes the
-      // work of the stress it had, the centred mean of the old stress and zero (not the trial
-      // deviator, which never acts: with it, expanding debris gained energy without bound)
-      const double sDc = 0.5 * ((a0 + sxx) * lxx + (b0 + syy) * lyy + 2.0 * (c0 + sxy) * dxy);
-      const double e_c = (e_old + (dt * 0.5 * (V0 + V) * sDc - (0.5 * (P0 + cold) + qv) * dV) / m) /
-                         (1.0 + 0.5 * eos.gamma_rho() * dV / m);
-      const double sD_fr = 0.5 * (a0 * lxx + b0 * lyy + 2.0 * c0 * dxy);
-      const double e_fr = e_old + (dt * 0.5 * (V0 + V) * sD_fr - 0.5 * P0 * dV) / m;
-      const bool fr = (cold + eos.gamma_rho() * e_c < p_min) | (rho < rho_min);
-      e = fr ? e_fr : e_c;
-      }
-      Pn = cold + eos.gamma_rho() * e;
-    } else {
-      Pn = eos.pressure(rho, 0.0);
-    }
-    // Fractured (spall: tension below p_min, or expansion below rho_min): carries neither
-    // tension nor shear from now on. The elastic shear energy held in the deviator is released
-    // (lost): energy.csv shows it. No artificial viscosity either: a fractured point is debris,
-    // often alone in its cells, whose velocity gradient is noise; a viscous signal speed from
-    // it stalled a 2 us porous run at dt = 7e-4 ns when the compaction front reached the free
-    // top and it spalled.
-    const bool fractured = (Pn < p_min) | (rho < rho_min);
-    const double vabs = std::sqrt(vxp[p] * vxp[p] + vyp[p] * vyp[p]);
-    const double sig = fractured ? c_fractured + vabs : signal_speed(eos, str, rho, Pn, vxp[p], vyp[p]) + qspeed;
-    vmax = std::max(vmax, on ? sig : 0.0);
-    // stores: unselected points keep their state
-    Vp[p] = on ? V : V0;
-    sxxp[p] = on ? (fractured ? 0.0 : sxx) : a0;
-    syyp[p] = on ? (fractured ? 0.0 : syy) : b0;
-    sxyp[p] = on ? (fractured ? 0.0 : sxy) : c0;
-    pp[p] = on ? (fractured ? 0.0 : Pn) : P0;
-    if constexpr (Strength::plastic) epspp[p] = on ? epsp : epspp[p];
-    if constexpr (HasE) ep[p] = on ? e : ep[p];
-    if constexpr (HasQ) qp[p] = on ? (fractured ? 0.0 : qv) : qp[p];
-    if constexpr (HasWp) wpp[p] += on ? Wp * V / m : 0.0;
+    vmax = std::max(vmax, update_point<HasE, HasQ, HasWp, Midstep>(A, p, on, V, prm, eos, str, c_fractured));
   }
   return {vmax, bad == static_cast<std::ptrdiff_t>(cnt) ? -1 : static_cast<std::ptrdiff_t>(first) + bad};
 }
@@ -354,7 +559,7 @@ ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveS
     auto mid = [&](auto W) {
       constexpr bool w_ = decltype(W)::value;
       if constexpr (e_) {
-        // q.midstep reads L.work(0), wyy, wxy: only kern::g2p_blocks' heating USL pass writes them
+        // q.midstep reads L.work(k): only kern::g2p_blocks' heating USL pass writes it
         if (q.midstep) return constitutive_range<s_, e_, q_, w_, true>(P, S, L, first, last, q, eos, str, sel);
       }
       return constitutive_range<s_, e_, q_, w_, false>(P, S, L, first, last, q, eos, str, sel);
@@ -397,7 +602,9 @@ double max_signal_speed(const ParticleView& P, std::size_t n, const Eos& eos, co
 #pragma omp parallel for schedule(static) reduction(max : vmax)
   for (std::size_t p = 0; p < n; ++p) {
     if (!sel(p)) continue;
-    vmax = std::max(vmax, signal_speed(eos, str, P.m[p] / P.V[p], P.p[p], P.vel(0)[p], P.vel(1)[p]));
+    double v2 = P.vel(0)[p] * P.vel(0)[p];
+    for (int d = 1; d < kDim; ++d) v2 += P.vel(d)[p] * P.vel(d)[p];
+    vmax = std::max(vmax, signal_speed(eos, str, P.m[p] / P.V[p], P.p[p], v2));
   }
   return vmax;
 }

@@ -260,8 +260,8 @@ TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
   CHECK(a.particles.pos(1) == b.particles.pos(1));
   REQUIRE(a.materials.size() == b.materials.size());
   CHECK(a.materials[0].rho0 == b.materials[0].rho0);
-  CHECK(a.materials[0].c0 == b.materials[0].c0);
-  CHECK(a.materials[0].Y0 == b.materials[0].Y0);
+  CHECK(a.materials[0].eos == b.materials[0].eos);
+  CHECK(a.materials[0].strength == b.materials[0].strength);
   CHECK(a.materials[0].spall_strength == b.materials[0].spall_strength);
   Simulation sa(a.geom, a.solver, a.materials, a.body_material, a.particles);
   Simulation sb(b.geom, b.solver, b.materials, b.body_material, b.particles);
@@ -287,8 +287,8 @@ TEST_CASE("case: a case that names its materials_file resolves to one that build
   REQUIRE(a.materials.size() == b.materials.size());
   for (std::size_t k = 0; k < a.materials.size(); ++k) {
     CHECK(a.materials[k].rho0 == b.materials[k].rho0);
-    CHECK(a.materials[k].c0 == b.materials[k].c0);
-    CHECK(a.materials[k].Y0 == b.materials[k].Y0);
+    CHECK(a.materials[k].eos == b.materials[k].eos);
+    CHECK(a.materials[k].strength == b.materials[k].strength);
   }
 }
 

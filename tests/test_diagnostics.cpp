@@ -109,15 +109,12 @@ TEST_CASE("open porosity: a hot fractured point holds its zero-pressure volume, 
   // material of that energy has zero pressure (its thermal expansion is not void); a cold one
   // (e = 0) keeps m / rho0 as before.
   Material m;
-  m.eos = EosKind::MieGruneisen;
+  m.eos = MieGruneisenModel{5350, 1.34, 2.0};
   m.rho0 = 2700;
-  m.c0 = 5350;
-  m.s = 1.34;
-  m.gamma0 = 2.0;
   m.E = 69e9;
   m.nu = 0.33;
   m.cv = 880;
-  const kern::MieGruneisenEos eos = m.mie_gruneisen();
+  const kern::MieGruneisenEos eos = m.gruneisen().value();
   const double e = 6e5;  // [J/kg], about 980 K
   const double rho_zp = eos.zero_pressure_density(e);
   // the definition: zero pressure at (rho_zp, e), and below rho0 (tension branch)

@@ -21,8 +21,8 @@ TEST_CASE("heat conduction: 1D temperature step against the erf solution", "[ver
   g.wrap[0] = true;
   Material m;
   m.name = "conductor";
-  m.eos = EosKind::Linear;
-  m.strength = StrengthKind::None;
+  m.eos = LinearEosModel{};
+  m.strength = NoStrengthModel{};
   m.rho0 = 1.0;
   m.E = 1.0;
   m.nu = 0.25;

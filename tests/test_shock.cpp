@@ -61,7 +61,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   const double E0 = sim.energy().total();
   const double t_end = sc.run.end_time;
   const double G = mat.shear_modulus(), K = mat.bulk_modulus();
-  const double hel = mat.Y0 * (K / (2 * G) + 2.0 / 3.0);
+  const double hel = std::get<VonMisesModel>(mat.strength).Y0 * (K / (2 * G) + 2.0 / 3.0);
   std::vector<double> tf, yf, tp, yp;
   double wall_sum = 0, wall_n = 0;
   while (sim.time() < t_end) {
