@@ -525,7 +525,11 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   const std::size_t cnt = last - first;
   double vmax = 0.0;
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(cnt);
+  // the parameters and parts as locals: a load through a reference that the compiler sinks
+  // under a condition is a masked load it does not vectorize
   const ConstitutiveParams prm = q;
+  const Eos eos_l = eos;
+  const Strength str_l = str;
   // a fractured point's signal speed: the sound speed at rest (its stress is zero)
   const double c_fractured = std::sqrt(eos.bulk_modulus(eos.rho0, 0.0) / eos.rho0);
   const RangeArrays A{P, S, L, sel, first};
@@ -534,7 +538,7 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
     const bool on = !Selective || A.sel.select[A.sel.body[A.first + p]];
     const double V = step_volume(A, p, prm);
     bad = std::min(bad, on & !(V > 0.0) ? static_cast<std::ptrdiff_t>(p) : static_cast<std::ptrdiff_t>(cnt));
-    vmax = std::max(vmax, update_point<HasE, HasQ, HasWp, Midstep>(A, p, on, V, prm, eos, str, c_fractured));
+    vmax = std::max(vmax, update_point<HasE, HasQ, HasWp, Midstep>(A, p, on, V, prm, eos_l, str_l, c_fractured));
   }
   return {vmax, bad == static_cast<std::ptrdiff_t>(cnt) ? -1 : static_cast<std::ptrdiff_t>(first) + bad};
 }
