@@ -84,7 +84,7 @@ double cfl_dt() { return kCfl * kH / wave_speed(); }
 std::array<const double*, kern::kDim> positions(smpm::Particles& P) {
   const auto v = P.view();
   std::array<const double*, kern::kDim> a{};
-  for (int d = 0; d < kern::kDim; ++d) a[d] = v.pos(d);
+  for (int d = 0; d < kern::kDim; ++d) a[d] = v.x[d];
   return a;
 }
 
@@ -160,10 +160,10 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double d = kH / kPpc;
   for (std::size_t i = 0; i < n; ++i) {
-    P.pos(0)[i] += 0.4 * d * u(rng);
-    P.pos(1)[i] += 0.4 * d * u(rng);
-    P.vel(0)[i] = 10.0 * u(rng);
-    P.vel(1)[i] = 10.0 * u(rng);
+    P.x[0][i] += 0.4 * d * u(rng);
+    P.x[1][i] += 0.4 * d * u(rng);
+    P.v[0][i] = 10.0 * u(rng);
+    P.v[1][i] = 10.0 * u(rng);
     P.grad(0, 0)[i] = 1e3 * u(rng);
     P.grad(0, 1)[i] = 1e3 * u(rng);
     P.grad(1, 0)[i] = 1e3 * u(rng);
@@ -172,9 +172,9 @@ std::unique_ptr<KernelState> build_kernel_state(std::size_t n) {
     P.affine(0, 1)[i] = 1e3 * u(rng);
     P.affine(1, 0)[i] = 1e3 * u(rng);
     P.affine(1, 1)[i] = 1e3 * u(rng);
-    P.dev(0)[i] = 1e7 * u(rng);
-    P.dev(1)[i] = 1e7 * u(rng);
-    P.dev(2)[i] = 1e7 * u(rng);
+    P.s[0][i] = 1e7 * u(rng);
+    P.s[1][i] = 1e7 * u(rng);
+    P.s[2][i] = 1e7 * u(rng);
     P.p[i] = 1e8 * u(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
@@ -303,7 +303,7 @@ void BM_G2P(benchmark::State& state) {
   auto pv = s->P.view();
   // G2P overwrites velocities, gradients and the APIC matrix: keep the shared state as built.
   Particles& P = s->P;
-  std::vector<double>* written[] = {&P.vel(0), &P.vel(1), &P.grad(0, 0), &P.grad(0, 1), &P.grad(1, 0), &P.grad(1, 1),
+  std::vector<double>* written[] = {&P.v[0], &P.v[1], &P.grad(0, 0), &P.grad(0, 1), &P.grad(1, 0), &P.grad(1, 1),
                                     &P.affine(0, 0), &P.affine(0, 1), &P.affine(1, 0), &P.affine(1, 1)};
   std::vector<std::vector<double>> saved;
   for (auto* v : written) saved.push_back(*v);
@@ -351,8 +351,8 @@ std::unique_ptr<StepTemplate> build_step_template(std::size_t n) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const double dv = 1e-4 * wave_speed();  // ~0.6 m/s
   for (std::size_t i = 0; i < n; ++i) {
-    P.vel(0)[i] = dv * u(rng);
-    P.vel(1)[i] = dv * u(rng);
+    P.v[0][i] = dv * u(rng);
+    P.v[1][i] = dv * u(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
   if (!sort_particles(g, P)) s->error = "a particle lies outside the grid";

@@ -9,8 +9,8 @@ namespace smpm {
 
 double front_position(const Particles& P, std::uint8_t body, double u0, double lo, double h, int rows,
                       bool from_top) {
-  const std::vector<double>& pos = P.pos(kImpactAxis);
-  const std::vector<double>& vel = P.vel(kImpactAxis);
+  const std::vector<double>& pos = P.x[kImpactAxis];
+  const std::vector<double>& vel = P.v[kImpactAxis];
   std::vector<double> sum(rows, 0.0);
   std::vector<int> count(rows, 0);
   for (std::size_t i = 0; i < P.size(); ++i) {
@@ -86,7 +86,7 @@ Moments moments(const std::vector<double>& v) {
 // either way.
 static double solid_volume(const Particles& P, std::size_t i, const Material& mat) {
   bool fractured = P.p[i] == 0.0;
-  for (int k = 0; k < kern::sym_size(kern::kDim); ++k) fractured = fractured && P.dev(k)[i] == 0.0;
+  for (int k = 0; k < kern::sym_size(kern::kDim); ++k) fractured = fractured && P.s[k][i] == 0.0;
   if (!fractured || mat.rho0 <= 0.0) return P.V[i];
   const double rho_zp = !P.e.empty() ? mat.zero_pressure_density(P.e[i]) : mat.rho0;
   // e past C / (Gamma rho0) (about 1.4e7 J/kg for Al) leaves the tension branch no zero-pressure
@@ -94,12 +94,11 @@ static double solid_volume(const Particles& P, std::size_t i, const Material& ma
   return rho_zp > 0.0 ? std::min(P.V[i], P.m[i] / rho_zp) : P.V[i];
 }
 
-// The velocity gradient L of point i [1/s] (Particles::grad has no const overload: read only).
+// The velocity gradient L of point i [1/s].
 static kern::Mat<kern::kDim> velocity_gradient(const Particles& P, std::size_t i) {
-  auto& Q = const_cast<Particles&>(P);
   kern::Mat<kern::kDim> L;
   for (int r = 0; r < kern::kDim; ++r)
-    for (int c = 0; c < kern::kDim; ++c) L(r, c) = Q.grad(r, c)[i];
+    for (int c = 0; c < kern::kDim; ++c) L(r, c) = P.grad(r, c)[i];
   return L;
 }
 
@@ -109,7 +108,7 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
   const std::size_t nr = regions.size();
   std::vector<std::vector<double>> p(nr), T(nr), rho(nr), u(nr);  // u: velocity along the impact axis
   std::vector<RegionStats> out(nr);
-  const std::vector<double>& pos = P.pos(kImpactAxis);
+  const std::vector<double>& pos = P.x[kImpactAxis];
   for (std::size_t i = 0; i < P.size(); ++i) {
     for (std::size_t r = 0; r < nr; ++r) {
       const Region& g = regions[r];
@@ -118,7 +117,7 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       p[r].push_back(P.p[i]);
       T[r].push_back(particle_temperature(P, i, thermo[k], materials[k]));
       rho[r].push_back(P.m[i] / P.V[i]);
-      u[r].push_back(P.vel(kImpactAxis)[i]);
+      u[r].push_back(P.v[kImpactAxis][i]);
       const auto gm = gradient_measures(velocity_gradient(P, i));
       out[r].R2 += gm.R2;
       out[r].D2 += gm.D2;
@@ -177,7 +176,7 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
     Vector c;
     Index first, last;  // the pixels of the disk's bounding box (those of a wrapping axis unwrapped)
     for (int d = 0; d < kDim; ++d) {
-      c[d] = P.pos(d)[p];
+      c[d] = P.x[d][p];
       first[d] = static_cast<long>(std::ceil((c[d] - rad - R.lo[d]) / R.step[d] - 0.5));
       last[d] = static_cast<long>(std::floor((c[d] + rad - R.lo[d]) / R.step[d] - 0.5));
       if (!R.wrap[d]) {
@@ -306,8 +305,8 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
     for (int d = 0; d < kDim; ++d) {
-      b.lo[d] = std::min(b.lo[d], P.pos(d)[p]);
-      b.hi[d] = std::max(b.hi[d], P.pos(d)[p]);
+      b.lo[d] = std::min(b.lo[d], P.x[d][p]);
+      b.hi[d] = std::max(b.hi[d], P.x[d][p]);
     }
     smax = std::max(smax, std::sqrt(P.V[p]));
   }

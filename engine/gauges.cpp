@@ -18,7 +18,7 @@ NearestPoint nearest_point(const Particles& P, const Vector& at, const std::vect
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (std::size_t{P.body[i]} >= in_body.size() || !in_body[P.body[i]]) continue;
     double e[kern::kDim];  // point - at [m]
-    for (int d = 0; d < kern::kDim; ++d) e[d] = P.pos(d)[i] - at[d];
+    for (int d = 0; d < kern::kDim; ++d) e[d] = P.x[d][i] - at[d];
     const double d2 = kern::norm2(e);
     if (d2 < best2) {  // strict: the lowest index among equally near points
       best2 = d2;
@@ -30,7 +30,7 @@ NearestPoint nearest_point(const Particles& P, const Vector& at, const std::vect
 }
 
 std::vector<std::uint32_t> top_row(const Particles& P, std::uint8_t body, double spacing) {
-  const std::vector<double>& pos = P.pos(kImpactAxis);
+  const std::vector<double>& pos = P.x[kImpactAxis];
   double top = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < P.size(); ++i)
     if (P.body[i] == body) top = std::max(top, pos[i]);
@@ -97,11 +97,11 @@ std::vector<GaugeSample> PointRecorder::sample(const Simulation& sim) {
     const int k = sim.body_material()[P.body[i]];
     GaugeSample smp;
     for (int d = 0; d < kern::kDim; ++d) {
-      smp.pos[d] = P.pos(d)[i];
-      smp.vel[d] = P.vel(d)[i];
+      smp.pos[d] = P.x[d][i];
+      smp.vel[d] = P.v[d][i];
     }
     // sigma = s - P 1: the pressure on the diagonal only
-    for (int c = 0; c < smp.sigma.K; ++c) smp.sigma[c] = c < kern::kDim ? P.dev(c)[i] - P.p[i] : P.dev(c)[i];
+    for (int c = 0; c < smp.sigma.K; ++c) smp.sigma[c] = c < kern::kDim ? P.s[c][i] - P.p[i] : P.s[c][i];
     smp.P = P.p[i];
     smp.rho = P.m[i] / P.V[i];
     smp.T = particle_temperature(P, i, sim.thermo()[k], sim.materials()[k]);
@@ -116,7 +116,7 @@ std::vector<double> PointRecorder::surface_velocity(const Simulation& sim) {
   std::vector<double> u;
   for (const auto& s : surfaces_) {
     double sum = 0.0;
-    for (const std::uint32_t id : s.ids) sum += P.vel(kImpactAxis)[where_[static_cast<std::size_t>(slot_[id])]];
+    for (const std::uint32_t id : s.ids) sum += P.v[kImpactAxis][where_[static_cast<std::size_t>(slot_[id])]];
     u.push_back(s.ids.empty() ? 0.0 : sum / double(s.ids.size()));
   }
   return u;

@@ -50,13 +50,7 @@ struct Particles {
   std::vector<std::uint8_t> field;
 
   std::size_t size() const { return x[0].size(); }
-  // Component arrays by axis d, symmetric component k, row r and column c.
-  std::vector<double>& pos(int d) { return x[d]; }
-  const std::vector<double>& pos(int d) const { return x[d]; }
-  std::vector<double>& vel(int d) { return v[d]; }
-  const std::vector<double>& vel(int d) const { return v[d]; }
-  std::vector<double>& dev(int k) { return s[k]; }
-  const std::vector<double>& dev(int k) const { return s[k]; }
+  // The velocity gradient and the affine matrix by row r and column c.
   std::vector<double>& grad(int r, int c) { return L[r * kern::kDim + c]; }
   const std::vector<double>& grad(int r, int c) const { return L[r * kern::kDim + c]; }
   std::vector<double>& affine(int r, int c) { return C[r * kern::kDim + c]; }

@@ -39,7 +39,7 @@ SiteIndex index_sites(const Particles& P, double step, const Vector& origin, con
     Index a;
     bool out = false;
     for (int d = 0; d < kDim; ++d) {
-      a[d] = static_cast<long>(std::floor((P.pos(d)[i] - origin[d]) / step));
+      a[d] = static_cast<long>(std::floor((P.x[d][i] - origin[d]) / step));
       out = out || a[d] < S.first[d] || a[d] >= S.first[d] + S.n[d];
     }
     if (out) throw std::logic_error("cut_voids: point outside the body rectangle");
@@ -107,8 +107,8 @@ Particles keep_unremoved(const Particles& P, const Removal& R) {
   for (std::size_t i = 0; i < P.size(); ++i) {
     if (R.removed[i]) continue;
     for (int d = 0; d < kDim; ++d) {
-      Q.pos(d)[k] = P.pos(d)[i];
-      Q.vel(d)[k] = P.vel(d)[i];
+      Q.x[d][k] = P.x[d][i];
+      Q.v[d][k] = P.v[d][i];
     }
     Q.m[k] = P.m[i]; Q.V[k] = P.V[i]; Q.body[k] = P.body[i];
     ++k;
@@ -160,8 +160,8 @@ PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Bo
 Particles mirror(const Particles& P, int axis, double plane) {
   Particles Q = P;
   for (std::size_t i = 0; i < Q.size(); ++i) {
-    Q.pos(axis)[i] = 2.0 * plane - P.pos(axis)[i];
-    Q.vel(axis)[i] = -P.vel(axis)[i];
+    Q.x[axis][i] = 2.0 * plane - P.x[axis][i];
+    Q.v[axis][i] = -P.v[axis][i];
   }
   return Q;
 }
@@ -254,7 +254,7 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vecto
     double x[kDim];
     Index home;
     for (int d = 0; d < kDim; ++d) {
-      x[d] = P.pos(d)[p];
+      x[d] = P.x[d][p];
       home[d] = K.along(d, x[d]);
     }
     double best = reach;

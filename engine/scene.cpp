@@ -138,8 +138,8 @@ Particles fill_lattice(const kern::GridGeom& g, int ppc, const Box& box, double 
       if (!inside(c)) return;
       if (pass == 1) {
         for (int a = 0; a < kDim; ++a) {
-          P.pos(a)[k] = c[a];
-          P.vel(a)[k] = v[a];
+          P.x[a][k] = c[a];
+          P.v[a][k] = v[a];
         }
         P.V[k] = vol;
         P.m[k] = mass;
@@ -527,12 +527,12 @@ Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8
   S.resize(sb.particles);
   for (std::size_t i = 0; i < sb.particles; ++i) {
     const std::size_t j = first + i;
-    for (int a = 0; a < kDim; ++a) S.pos(a)[i] = s.particles.pos(a)[j];
+    for (int a = 0; a < kDim; ++a) S.x[a][i] = s.particles.x[a][j];
     S.m[i] = s.particles.m[j]; S.V[i] = s.particles.V[j];
   }
   Particles P = mirror(S, A, plane);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    for (int a = 0; a < kDim; ++a) P.vel(a)[i] = v[a];
+    for (int a = 0; a < kDim; ++a) P.v[a][i] = v[a];
     P.body[i] = b;
   }
   box = sb.box;
@@ -633,7 +633,7 @@ void claim_sites(const std::vector<CaseReader>& bodies, std::size_t b, const Sce
     long long key = 0;
     Vector at;  // [m]
     for (int a = kDim - 1; a >= 0; --a) {
-      at[a] = P.pos(a)[i];
+      at[a] = P.x[a][i];
       key = key * (1LL << (64 / kDim)) + std::llround((at[a] - s.geom.lo[a]) / d - 0.5);
     }
     auto [pos, fresh] = L.taken.emplace(key, b);
@@ -794,8 +794,8 @@ void add_free_surfaces(Scene& s, double d) {
     }
     for (const std::uint32_t i : f.ids)
       for (int a = 0; a < kDim; ++a) {
-        row.lo[a] = std::min(row.lo[a], P.pos(a)[i]);
-        row.hi[a] = std::max(row.hi[a], P.pos(a)[i]);
+        row.lo[a] = std::min(row.lo[a], P.x[a][i]);
+        row.hi[a] = std::max(row.hi[a], P.x[a][i]);
       }
     const double top = row.hi[A];
     const std::string key = "case key 'bodies[" + std::to_string(b) + "].record_free_surface' = true (body '" +
@@ -807,7 +807,7 @@ void add_free_surfaces(Scene& s, double d) {
     auto on_top = [&](std::size_t i) {
       bool on = P.body[i] != static_cast<std::uint8_t>(b);
       for (int a = 0; a < kDim; ++a) {
-        const double q = P.pos(a)[i];
+        const double q = P.x[a][i];
         on = on && (a == A ? q > top && q < top + 1.5 * d : q > row.lo[a] - d && q < row.hi[a] + d);
       }
       return on;

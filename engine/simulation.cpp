@@ -207,7 +207,7 @@ void Simulation::merge_closed_faces() {
   kern::with_shape(cfg_.shape, [&](auto shape) {
     const auto pv = P_.view();
     const double* pos[kern::kDim];
-    for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.pos(d);
+    for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.x[d];
     kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), pos, P_.field.data(), P_.size(), q,
                                               node_state_.data());
   });
@@ -247,7 +247,7 @@ void Simulation::sort_by_cell() {
   const std::size_t n = P_.size();
   const auto pv = P_.view();
   const double* pos[kern::kDim];
-  for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.pos(d);
+  for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.x[d];
   const auto bad = kern::compute_keys(g, pos, n, key_.data());
   if (bad >= 0) {
     std::string span;
@@ -445,7 +445,7 @@ void Simulation::conduct_heat() {
   const kern::HeatGrid H{grid_.cap.data(), grid_.capT.data(), grid_.T.data(), grid_.dT.data()};
   const auto pv = P_.view();
   kern::HeatParticles hp{{}, P_.m.data(), T_.data(), P_.body.data(), cv_body_.data(), P_.e.data()};
-  for (int d = 0; d < kern::kDim; ++d) hp.pos[d] = pv.pos(d);
+  for (int d = 0; d < kern::kDim; ++d) hp.pos[d] = pv.x[d];
   std::fill(grid_.cap.begin(), grid_.cap.end(), 0.0);
   std::fill(grid_.capT.begin(), grid_.capT.end(), 0.0);
   // the particles moved in this step: sort them again for the scatter
@@ -492,13 +492,13 @@ Simulation::Energy Simulation::energy() const {
   const auto pv = const_cast<Particles&>(P_).view();
   for (std::size_t p = 0; p < P_.size(); ++p) {
     double v[kern::kDim];
-    for (int d = 0; d < kern::kDim; ++d) v[d] = pv.vel(d)[p];
+    for (int d = 0; d < kern::kDim; ++d) v[d] = pv.v[d][p];
     e.kinetic += 0.5 * P_.m[p] * kern::norm2(v);
     if (apic) {  // the affine field's share: 1/2 m sum_ab C_ab^2 D_b
       double Dn[kern::kDim], C[kern::kDim][kern::kDim];
       kern::with_shape(cfg_.shape, [&](auto shape) {
         kern::Vec<kern::kDim> u;
-        for (int d = 0; d < kern::kDim; ++d) u[d] = (pv.pos(d)[p] - g.origin(d)) / g.h;
+        for (int d = 0; d < kern::kDim; ++d) u[d] = (pv.x[d][p] - g.origin(d)) / g.h;
         const kern::Stencil<decltype(shape), kern::kDim> st(u, cfg_.ugimp_lp);
         for (int d = 0; d < kern::kDim; ++d) Dn[d] = st.inertia(d);
       });
@@ -511,7 +511,7 @@ Simulation::Energy Simulation::energy() const {
     } else {
       const Material& mat = materials_[body_material_[P_.body[p]]];
       kern::Sym<kern::kDim> s;
-      for (int k = 0; k < kern::Sym<kern::kDim>::K; ++k) s[k] = P_.dev(k)[p];
+      for (int k = 0; k < kern::Sym<kern::kDim>::K; ++k) s[k] = P_.s[k][p];
       e.internal += P_.V[p] * mat.strain_energy_density(s, P_.p[p]);
     }
   }
@@ -588,7 +588,7 @@ std::array<double, kern::kDim> Simulation::momentum() const {
   std::array<double, kern::kDim> q{};
   const auto pv = const_cast<Particles&>(P_).view();
   for (std::size_t p = 0; p < P_.size(); ++p)
-    for (int d = 0; d < kern::kDim; ++d) q[d] += P_.m[p] * pv.vel(d)[p];
+    for (int d = 0; d < kern::kDim; ++d) q[d] += P_.m[p] * pv.v[d][p];
   return q;
 }
 

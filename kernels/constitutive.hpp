@@ -366,11 +366,11 @@ SMPM_INLINE PointIn<D> load_point(const RangeArrays& A, std::size_t p) {
     in.L(r, c) = A.L.at(r, c)[p];
   });
   each<Sym<D>::K>([&](auto k) __attribute__((always_inline)) {
-    in.s[k] = A.P.dev(k)[i];
+    in.s[k] = A.P.s[k][i];
     if constexpr (Midstep) in.dmid[k] = A.L.work(k)[p];
   });
-  in.v2 = A.P.vel(0)[i] * A.P.vel(0)[i];
-  each<D - 1>([&](auto d) __attribute__((always_inline)) { in.v2 += A.P.vel(d + 1)[i] * A.P.vel(d + 1)[i]; });
+  in.v2 = A.P.v[0][i] * A.P.v[0][i];
+  each<D - 1>([&](auto d) __attribute__((always_inline)) { in.v2 += A.P.v[d + 1][i] * A.P.v[d + 1][i]; });
   in.m = A.P.m[i];
   in.V0 = A.P.V[i];
   in.P0 = A.P.p[i];
@@ -480,7 +480,7 @@ SMPM_INLINE double update_point(const RangeArrays& A, std::size_t p, bool on, do
   const double sig = fractured ? c_fractured + vabs : signal_speed(eos, str, rho, ep.P, in.v2) + visc.speed;
   A.P.V[i] = on ? V : in.V0;
   each<Sym<D>::K>([&](auto k) __attribute__((always_inline)) {
-    A.P.dev(k)[i] = on ? (fractured ? 0.0 : sr.s[k]) : in.s[k];
+    A.P.s[k][i] = on ? (fractured ? 0.0 : sr.s[k]) : in.s[k];
   });
   A.P.p[i] = on ? (fractured ? 0.0 : ep.P) : in.P0;
   if constexpr (Strength::plastic) A.S.epsp[i] = on ? sr.st.epsp : in.st.epsp;
@@ -606,8 +606,8 @@ double max_signal_speed(const ParticleView& P, std::size_t n, const Eos& eos, co
 #pragma omp parallel for schedule(static) reduction(max : vmax)
   for (std::size_t p = 0; p < n; ++p) {
     if (!sel(p)) continue;
-    double v2 = P.vel(0)[p] * P.vel(0)[p];
-    for (int d = 1; d < kDim; ++d) v2 += P.vel(d)[p] * P.vel(d)[p];
+    double v2 = P.v[0][p] * P.v[0][p];
+    for (int d = 1; d < kDim; ++d) v2 += P.v[d][p] * P.v[d][p];
     vmax = std::max(vmax, signal_speed(eos, str, P.m[p] / P.V[p], P.p[p], v2));
   }
   return vmax;

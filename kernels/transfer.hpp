@@ -106,7 +106,7 @@ struct TileSink {
 SMPM_INLINE Vec<kDim> grid_units(const GridGeom& g, const ParticleView& P, std::size_t p, double inv_h) {
   Vec<kDim> u;
 #pragma GCC unroll 3
-  for (int d = 0; d < kDim; ++d) u[d] = (P.pos(d)[p] - g.origin(d)) * inv_h;
+  for (int d = 0; d < kDim; ++d) u[d] = (P.x[d][p] - g.origin(d)) * inv_h;
   return u;
 }
 // Storage index of the stencil node with offsets a, from the index of the stencil's first node
@@ -139,7 +139,7 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
   const double m = P.m[p];
   double mv[D], mC[D][D] = {};
 #pragma GCC unroll 3
-  for (int d = 0; d < D; ++d) mv[d] = m * P.vel(d)[p];
+  for (int d = 0; d < D; ++d) mv[d] = m * P.v[d][p];
   if constexpr (APIC) {  // grid-unit offsets: fold h in here
 #pragma GCC unroll 3
     for (int r = 0; r < D; ++r)
@@ -151,10 +151,10 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
     const double Vh = P.V[p] * inv_h;
     const double pq = P.q ? P.p[p] + P.q[p] : P.p[p];
 #pragma GCC unroll 3
-    for (int d = 0; d < D; ++d) vs[d][d] = -Vh * (P.dev(d)[p] - pq);
+    for (int d = 0; d < D; ++d) vs[d][d] = -Vh * (P.s[d][p] - pq);
     for (int k = D; k < sym_size(D); ++k) {
       const int a = sym_row(D, k), b = sym_col(D, k);
-      vs[a][b] = vs[b][a] = -Vh * P.dev(k)[p];
+      vs[a][b] = vs[b][a] = -Vh * P.s[k][p];
     }
   }
   const std::size_t foff = Contact ? sink.field_offset(P.field(p)) : 0;
@@ -436,11 +436,11 @@ SMPM_INLINE void move_point(const GridGeom& g, const ParticleView& P, std::size_
                             const double* v) {
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) {
-    double c = P.pos(d)[p] + q.dt * v[d];
+    double c = P.x[d][p] + q.dt * v[d];
     const double o = g.origin(d), L = g.periodic(d) ? g.cells(d) * g.h : 0.0;
     c = c < o ? c + L : c;
     c = c >= o + L ? c - L : c;
-    P.pos(d)[p] = std::min(std::max(c, q.lo[d]), q.hi[d]);
+    P.x[d][p] = std::min(std::max(c, q.lo[d]), q.hi[d]);
   }
 }
 
@@ -608,7 +608,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   if constexpr (Heat) {
 #pragma GCC unroll 3
     for (int r = 0; r < D; ++r) {
-      u[r] = P.vel(r)[p];
+      u[r] = P.v[r][p];
       if constexpr (!FLIP)
 #pragma GCC unroll 3
         for (int c = 0; c < D; ++c) uC(r, c) = P.affine(r, c)[p] * g.h;
@@ -650,7 +650,7 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   if constexpr (What != G2PWhat::PositionGradient) {
 #pragma GCC unroll 3
     for (int d = 0; d < D; ++d) {
-      double* v = P.vel(d);
+      double* v = P.v[d];
       if constexpr (PureFlip) v[p] = v[p] + S.dv[d];
       else if constexpr (FLIP) v[p] = q.flip_alpha * (v[p] + S.dv[d]) + (1.0 - q.flip_alpha) * S.v[d];
       else v[p] = S.v[d];

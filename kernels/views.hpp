@@ -206,12 +206,9 @@ struct ParticleView {
   // particle, Particles::field (null: one field).
   const std::uint8_t* field_of = nullptr;
   std::size_t field(std::size_t i) const { return field_of ? field_of[i] : 0; }
-  // Component arrays by axis d, symmetric component k, row r and column c.
-  SMPM_INLINE double* pos(int d) const { return x[d]; }
-  SMPM_INLINE double* vel(int d) const { return v[d]; }
+  // The velocity gradient and the affine matrix by row r and column c.
   SMPM_INLINE double* grad(int r, int c) const { return L[r * kDim + c]; }
   SMPM_INLINE double* affine(int r, int c) const { return C[r * kDim + c]; }
-  SMPM_INLINE double* dev(int k) const { return s[k]; }
 };
 
 // The calling thread's share [begin, end) of n items in an omp parallel region: contiguous

@@ -256,8 +256,8 @@ TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
   Scene a = build_scene(doc, "quickstart", dir);
   Scene b = build_scene(resolved_again(a, "smpm_test_resolved"), "again", ".");
   REQUIRE(a.particles.size() == b.particles.size());
-  CHECK(a.particles.pos(0) == b.particles.pos(0));
-  CHECK(a.particles.pos(1) == b.particles.pos(1));
+  CHECK(a.particles.x[0] == b.particles.x[0]);
+  CHECK(a.particles.x[1] == b.particles.x[1]);
   REQUIRE(a.materials.size() == b.materials.size());
   CHECK(a.materials[0].rho0 == b.materials[0].rho0);
   CHECK(a.materials[0].eos == b.materials[0].eos);
@@ -269,8 +269,8 @@ TEST_CASE("case: the resolved case re-runs to the same result", "[case]") {
     sa.step();
     sb.step();
   }
-  CHECK(sa.particles().pos(0) == sb.particles().pos(0));
-  CHECK(sa.particles().vel(1) == sb.particles().vel(1));
+  CHECK(sa.particles().x[0] == sb.particles().x[0]);
+  CHECK(sa.particles().v[1] == sb.particles().v[1]);
   CHECK(sa.particles().p == sb.particles().p);
 }
 
@@ -283,7 +283,7 @@ TEST_CASE("case: a case that names its materials_file resolves to one that build
   CHECK_FALSE(again.contains("materials_file"));
   Scene b = build_scene(again, "again", ".");
   REQUIRE(a.particles.size() == b.particles.size());
-  CHECK(a.particles.pos(1) == b.particles.pos(1));
+  CHECK(a.particles.x[1] == b.particles.x[1]);
   REQUIRE(a.materials.size() == b.materials.size());
   for (std::size_t k = 0; k < a.materials.size(); ++k) {
     CHECK(a.materials[k].rho0 == b.materials[k].rho0);

@@ -47,7 +47,7 @@ double slope_acceleration(double theta_deg, double mu) {
     const auto& Q = sim.particles();
     for (std::size_t i = 0; i < Q.size(); ++i)
       if (Q.body[i] == 1) {
-        mv += Q.m[i] * Q.vel(0)[i];
+        mv += Q.m[i] * Q.v[0][i];
         M += Q.m[i];
       }
     t.push_back(sim.time());
@@ -99,7 +99,7 @@ Series run(bool two_body) {
   double next = 0.0;
   double scale = 0;
   for (std::size_t i = 0; i < sim.particles().size(); ++i)
-    scale += sim.particles().m[i] * std::fabs(sim.particles().vel(1)[i]);
+    scale += sim.particles().m[i] * std::fabs(sim.particles().v[1][i]);
   while (sim.time() < sc.run.end_time) {
     sim.step(std::min(sc.run.end_time, next) - sim.time());
     if (sim.time() < next - 1e-18) continue;
@@ -108,13 +108,13 @@ Series run(bool two_body) {
     double sum = 0, n = 0, ymin_t = 1, ymax_f = -1;
     for (std::size_t i = 0; i < P.size(); ++i) {
       if (P.body[i] == 0) {
-        ymin_t = std::min(ymin_t, P.pos(1)[i]);
-        if (P.pos(1)[i] >= 100e-6 && P.pos(1)[i] <= 600e-6) {
+        ymin_t = std::min(ymin_t, P.x[1][i]);
+        if (P.x[1][i] >= 100e-6 && P.x[1][i] <= 600e-6) {
           sum += P.p[i];
           n += 1;
         }
       } else {
-        ymax_f = std::max(ymax_f, P.pos(1)[i]);
+        ymax_f = std::max(ymax_f, P.x[1][i]);
       }
     }
     s.P.push_back(sum / n);
@@ -170,15 +170,15 @@ TEST_CASE("determinism: porous two-body shock, bitwise identical with 1 and 2 th
     out.push_back(sim.particles());
   }
   omp_set_num_threads(threads0);
-  Particles &a = out[0], &b = out[1];
+  const Particles &a = out[0], &b = out[1];
   REQUIRE(a.id == b.id);
-  CHECK((a.pos(0) == b.pos(0)));
-  CHECK((a.pos(1) == b.pos(1)));
-  CHECK((a.vel(0) == b.vel(0)));
-  CHECK((a.vel(1) == b.vel(1)));
+  CHECK((a.x[0] == b.x[0]));
+  CHECK((a.x[1] == b.x[1]));
+  CHECK((a.v[0] == b.v[0]));
+  CHECK((a.v[1] == b.v[1]));
   CHECK((a.V == b.V));
-  CHECK((a.dev(0) == b.dev(0)));
-  CHECK((a.dev(2) == b.dev(2)));
+  CHECK((a.s[0] == b.s[0]));
+  CHECK((a.s[2] == b.s[2]));
   CHECK((a.p == b.p));
   CHECK((a.e == b.e));
   CHECK((a.epsp == b.epsp));

@@ -47,9 +47,9 @@ TEST_CASE("velocity-gradient measures: rigid rotation and uniform expansion", "[
 TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
   Particles P;
   P.resize(6);
-  P.pos(1) = {0.5e-6, 150e-6, 250e-6, 350e-6, 700e-6, 150e-6};
+  P.x[1] = {0.5e-6, 150e-6, 250e-6, 350e-6, 700e-6, 150e-6};
   P.p = {9, 1e9, 2e9, 3e9, 4e9, 5e9};
-  P.vel(1) = {0, -1, -2, -3, -4, -5};
+  P.v[1] = {0, -1, -2, -3, -4, -5};
   P.body = {0, 0, 0, 0, 0, 1};  // the last one belongs to another body
   for (std::size_t i = 0; i < 6; ++i) {
     P.m[i] = 2.7e-9;
@@ -85,12 +85,12 @@ TEST_CASE("open porosity: a fractured point holds no more solid than m / rho0", 
   // a 2 x 5 um band (area 1e-11 m^2) with three points of m / rho0 = 1e-12 m^2 each
   Particles P;
   P.resize(3);
-  P.pos(1) = {1e-6, 2e-6, 3e-6};
+  P.x[1] = {1e-6, 2e-6, 3e-6};
   P.body = {0, 0, 0};
   for (std::size_t i = 0; i < 3; ++i) P.m[i] = 2.7e-9;
   P.V = {0.9e-12, 1e-6, 1.01e-12};  // compressed; fractured debris blown up; in tension
   P.p = {1e9, 0.0, -1e8};            // the fractured point: zero pressure, zero deviator
-  P.dev(0) = {1e8, 0.0, 0.0};
+  P.s[0] = {1e8, 0.0, 0.0};
   Material m;
   m.rho0 = 2700;
   m.E = 69e9;
@@ -125,13 +125,13 @@ TEST_CASE("open porosity: a hot fractured point holds its zero-pressure volume, 
   Particles P;
   P.resize(3);
   Particles::enable(P.e, 3, true);
-  P.pos(1) = {1e-6, 2e-6, 3e-6};
+  P.x[1] = {1e-6, 2e-6, 3e-6};
   P.body = {0, 0, 0};
   for (std::size_t i = 0; i < 3; ++i) P.m[i] = 2.7e-9;  // m / rho0 = 1e-12 m^2
   P.V = {1.2e-12, 1.2e-12, 1.01e-12};  // hot and fractured; cold and fractured; hot, thermally expanded, intact
   P.e = {e, 0.0, e};
   P.p = {0.0, 0.0, 0.0};
-  P.dev(0) = {0.0, 0.0, 1e6};  // the third carries a deviator: not fractured
+  P.s[0] = {0.0, 0.0, 1e6};  // the third carries a deviator: not fractured
   const std::vector<Thermo> th{Thermo(m)};
   const std::vector<Region> regions{{"band", 0.0, 5e-6, 0, 2e-6}};
   const auto s = region_stats(P, regions, th, {m}, {0});
@@ -152,18 +152,18 @@ TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
   const int rows = 200;
   P.resize(rows);
   for (int r = 0; r < rows; ++r) {
-    P.pos(1)[r] = (r + 0.5) * 5e-6;
-    P.vel(1)[r] = P.pos(1)[r] < 412.5e-6 ? 0.0 : -1000.0;
+    P.x[1][r] = (r + 0.5) * 5e-6;
+    P.v[1][r] = P.x[1][r] < 412.5e-6 ? 0.0 : -1000.0;
     P.body[r] = 0;
   }
   const double y = front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true);
   // rows 81 (centre 407.5 um, stopped) and 82 (412.5, moving): level 500 m/s is midway
   CHECK(y * 1e6 == Approx(410.0));
   // a linear ramp over 10 rows: the 50 % point
-  for (int r = 0; r < rows; ++r) P.vel(1)[r] = -1000.0 * std::clamp((r - 100) / 10.0, 0.0, 1.0);
+  for (int r = 0; r < rows; ++r) P.v[1][r] = -1000.0 * std::clamp((r - 100) / 10.0, 0.0, 1.0);
   const double y2 = front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true);
   CHECK(y2 * 1e6 == Approx((105 + 0.5) * 5.0));
   // the wave has reached the far end (the top rows move up, released): no front
-  for (int r = 0; r < rows; ++r) P.vel(1)[r] = r < 190 ? 0.0 : 300.0;
+  for (int r = 0; r < rows; ++r) P.v[1][r] = r < 190 ? 0.0 : 300.0;
   CHECK(std::isnan(front_position(P, 0, -1000.0, 0.0, 5e-6, rows, true)));
 }

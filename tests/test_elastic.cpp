@@ -45,7 +45,7 @@ BarResult bar(kern::ShapeKind shape, double h, Scheme scheme, Transfer transfer)
   cfg.walls.lo[0] = kern::Wall::Slip;
   cfg.walls.lo[1] = cfg.walls.hi[1] = kern::Wall::Slip;
   Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0}, {L, h}}, 1.0, Vector{0.0, 0.0}, 0);
-  for (std::size_t i = 0; i < P.size(); ++i) P.vel(0)[i] = 0.1 * std::sin(M_PI * P.pos(0)[i] / (2 * L));
+  for (std::size_t i = 0; i < P.size(); ++i) P.v[0][i] = 0.1 * std::sin(M_PI * P.x[0][i] / (2 * L));
   Simulation sim(g, cfg, {elastic(1.0, 100.0, 0.0)}, {0}, P);
   auto vcm = [&] {
     const auto q = sim.momentum();
@@ -118,11 +118,11 @@ TEST_CASE("two colliding elastic disks conserve energy", "[verification][elastic
       R.resize(0);
       std::vector<std::size_t> keep;
       for (std::size_t i = 0; i < Q.size(); ++i)
-        if ((Q.pos(0)[i] - cx) * (Q.pos(0)[i] - cx) + (Q.pos(1)[i] - cy) * (Q.pos(1)[i] - cy) < 0.04) keep.push_back(i);
+        if ((Q.x[0][i] - cx) * (Q.x[0][i] - cx) + (Q.x[1][i] - cy) * (Q.x[1][i] - cy) < 0.04) keep.push_back(i);
       R.resize(keep.size());
       for (std::size_t k = 0; k < keep.size(); ++k) {
         const auto i = keep[k];
-        R.pos(0)[k] = Q.pos(0)[i]; R.pos(1)[k] = Q.pos(1)[i]; R.vel(0)[k] = v; R.vel(1)[k] = v;
+        R.x[0][k] = Q.x[0][i]; R.x[1][k] = Q.x[1][i]; R.v[0][k] = v; R.v[1][k] = v;
         R.m[k] = 1000.0 * d * d; R.V[k] = d * d; R.body[k] = static_cast<std::uint8_t>(b);
       }
       P.append(R);
@@ -157,14 +157,14 @@ TEST_CASE("periodic sides: a translating block returns to its start", "[verifica
     cfg.shape = shape;
     cfg.fixed_dt = 1.0 / 400;  // 400 steps for one period at v = 1
     Particles P = fill_rectangle(g, 2, Box{{0.55, 0.2}, {0.95, 0.4}}, 10.0, Vector{1.0, 0.0}, 0);
-    const auto x0 = P.pos(0), y0 = P.pos(1);
+    const auto x0 = P.x[0], y0 = P.x[1];
     Simulation sim(g, cfg, {elastic(10.0, 1e3, 0.3)}, {0}, P);
     while (sim.time() < 1.0 - 1e-12) sim.step(1.0 - sim.time());
     const auto& Q = sim.particles();
     double err = 0;
     for (std::size_t i = 0; i < Q.size(); ++i) {
       const auto k = Q.id[i];
-      err = std::max(err, std::fabs(Q.pos(0)[i] - x0[k]) + std::fabs(Q.pos(1)[i] - y0[k]));
+      err = std::max(err, std::fabs(Q.x[0][i] - x0[k]) + std::fabs(Q.x[1][i] - y0[k]));
     }
     INFO("shape " << int(shape));
     CHECK(sim.steps() == 400);
@@ -192,7 +192,7 @@ TEST_CASE("determinism: bitwise-identical particle arrays with 1 and 2 threads",
       for (int threads : {1, 2}) {
         omp_set_num_threads(threads);
         Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0}, {0.048, 0.03}}, 2700.0, Vector{0.0, -200.0}, 0);
-        for (std::size_t i = 0; i < P.size(); ++i) P.vel(0)[i] = 20.0 * std::sin(200.0 * P.pos(1)[i]);
+        for (std::size_t i = 0; i < P.size(); ++i) P.v[0][i] = 20.0 * std::sin(200.0 * P.x[1][i]);
         Simulation sim(g, cfg, {elastic(2700.0, 69e9, 0.33)}, {0}, P);
         for (int s = 0; s < 200; ++s) sim.step();
         out.push_back(sim.particles());
@@ -200,11 +200,11 @@ TEST_CASE("determinism: bitwise-identical particle arrays with 1 and 2 threads",
       omp_set_num_threads(threads0);
       INFO("transfer " << int(transfer) << " scheme " << int(scheme));
       REQUIRE(out[0].id == out[1].id);
-      REQUIRE(out[0].pos(0) == out[1].pos(0));
-      REQUIRE(out[0].pos(1) == out[1].pos(1));
-      REQUIRE(out[0].vel(0) == out[1].vel(0));
-      REQUIRE(out[0].vel(1) == out[1].vel(1));
-      REQUIRE(out[0].dev(0) == out[1].dev(0));
+      REQUIRE(out[0].x[0] == out[1].x[0]);
+      REQUIRE(out[0].x[1] == out[1].x[1]);
+      REQUIRE(out[0].v[0] == out[1].v[0]);
+      REQUIRE(out[0].v[1] == out[1].v[1]);
+      REQUIRE(out[0].s[0] == out[1].s[0]);
       REQUIRE(out[0].p == out[1].p);
       REQUIRE(out[0].V == out[1].V);
     }

@@ -109,27 +109,27 @@ TEST_CASE("gauges follow the point nearest their position at t = 0 and the free 
     const Gauge& g = sc.gauges[k];
     CHECK(g.name == "plate_" + std::to_string(k));
     CHECK(P.body[g.id] == 0);
-    CHECK(P.pos(0)[g.id] == Approx(11.25e-6).margin(1e-15));
-    CHECK(P.pos(1)[g.id] == Approx((151.25 + 12.5 * k) * 1e-6).margin(1e-15));
+    CHECK(P.x[0][g.id] == Approx(11.25e-6).margin(1e-15));
+    CHECK(P.x[1][g.id] == Approx((151.25 + 12.5 * k) * 1e-6).margin(1e-15));
   }
   // without a body key: the flyer's point, and the resolved case names that body
   const Gauge& f = sc.gauges[16];
   CHECK(f.name == "flyer_mid");
   CHECK(P.body[f.id] == 1);
-  CHECK(P.pos(1)[f.id] == Approx(-301.25e-6).margin(1e-15));
+  CHECK(P.x[1][f.id] == Approx(-301.25e-6).margin(1e-15));
   CHECK(sc.resolved["gauges"][1]["body"].value_or(std::string()) == "flyer");
   CHECK(sc.resolved["gauges"][0]["count"].value_or(int64_t{0}) == 16);
   // the target's top row: 8 points (20 um at 2.5 um) at y = 598.75 um
   REQUIRE(sc.free_surfaces.size() == 1);
   CHECK(sc.free_surfaces[0].body_name == "target");
   REQUIRE(sc.free_surfaces[0].ids.size() == 8);
-  for (const auto id : sc.free_surfaces[0].ids) CHECK(P.pos(1)[id] == Approx(598.75e-6).margin(1e-15));
+  for (const auto id : sc.free_surfaces[0].ids) CHECK(P.x[1][id] == Approx(598.75e-6).margin(1e-15));
   // a gauge in a void follows the nearest point of its body, on the void's surface
   const Scene porous = verify_scene({"bodies.target.voids.center_um=[11.0, 301.0]", "bodies.target.voids.radius_um=10.0",
                                      "contact.void_faces=\"single_field\""});
   const Particles& Q = porous.particles;
   const std::uint32_t in_void = porous.gauges[12].id;
-  const double dist = std::hypot(Q.pos(0)[in_void] - 11e-6, Q.pos(1)[in_void] - 301e-6);
+  const double dist = std::hypot(Q.x[0][in_void] - 11e-6, Q.x[1][in_void] - 301e-6);
   CHECK(Q.body[in_void] == 0);
   CHECK(dist >= 10e-6);
   CHECK(dist < 10e-6 + 2.5e-6);
@@ -137,7 +137,7 @@ TEST_CASE("gauges follow the point nearest their position at t = 0 and the free 
   Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
   PointRecorder rec(sc.gauges, sc.free_surfaces, P.size());
   const auto s = rec.sample(sim);
-  CHECK(s[0].pos[1] == P.pos(1)[sc.gauges[0].id]);
+  CHECK(s[0].pos[1] == P.x[1][sc.gauges[0].id]);
   CHECK(s[0].vel[1] == -1000.0);
   CHECK(s[0].P == 0.0);
   CHECK(s[0].rho == Approx(2700.0).epsilon(1e-14));
@@ -163,12 +163,12 @@ TEST_CASE("the followed ids round-trip through a checkpoint and one without them
   write(&ids);
   rec.restore(CheckpointReader(file));
   Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
-  CHECK(rec.sample(sim)[0].pos[1] == sc.particles.pos(1)[ids[0]]);
+  CHECK(rec.sample(sim)[0].pos[1] == sc.particles.x[1][ids[0]]);
   // without the record (a checkpoint written before it existed): the case's ids
   write(nullptr);
   PointRecorder fresh(sc.gauges, sc.free_surfaces, sc.particles.size());
   fresh.restore(CheckpointReader(file));
-  CHECK(fresh.sample(sim)[0].pos[1] == sc.particles.pos(1)[sc.gauges[0].id]);
+  CHECK(fresh.sample(sim)[0].pos[1] == sc.particles.x[1][sc.gauges[0].id]);
   // a record of another length: refused by name
   ids.pop_back();
   write(&ids);

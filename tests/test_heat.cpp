@@ -37,7 +37,7 @@ TEST_CASE("heat conduction: 1D temperature step against the erf solution", "[ver
     Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0}, {0.04, 1.0}}, 1.0, Vector{0.0, 0.0}, 0);
     Simulation sim(g, cfg, {m}, {0}, P);
     auto& Q = sim.particles();
-    for (std::size_t i = 0; i < Q.size(); ++i) Q.e[i] = m.cv * ((Q.pos(1)[i] < y0 ? T1 : T2) - m.T0);
+    for (std::size_t i = 0; i < Q.size(); ++i) Q.e[i] = m.cv * ((Q.x[1][i] < y0 ? T1 : T2) - m.T0);
     const double alpha = 1.0, t_end = 100 * g.h * g.h / alpha;  // sqrt(alpha t) = 10 h
     REQUIRE(sim.stable_dt() == Approx(sim.heat_dt()));
     double E0 = 0;
@@ -46,7 +46,7 @@ TEST_CASE("heat conduction: 1D temperature step against the erf solution", "[ver
     double err = 0, E1 = 0;
     for (std::size_t i = 0; i < Q.size(); ++i) {
       const double T = sim.thermo()[0].temperature(Q.m[i] / Q.V[i], Q.e[i]);
-      const double exact = 0.5 * (T1 + T2) + 0.5 * (T2 - T1) * std::erf((Q.pos(1)[i] - y0) / (2 * std::sqrt(alpha * t_end)));
+      const double exact = 0.5 * (T1 + T2) + 0.5 * (T2 - T1) * std::erf((Q.x[1][i] - y0) / (2 * std::sqrt(alpha * t_end)));
       err = std::max(err, std::fabs(T - exact) / (T1 - T2));
       E1 += Q.m[i] * Q.e[i];
     }

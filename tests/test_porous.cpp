@@ -67,19 +67,19 @@ TEST_CASE("same seed, same sample on any thread count; another seed, another sam
   const Scene b = sample(0.5, 3);
   omp_set_num_threads(t0);
   const Scene c = sample(0.5, 4);
-  CHECK((a.particles.pos(0) == b.particles.pos(0)));  // (parenthesised: no element-wise printing)
-  CHECK((a.particles.pos(1) == b.particles.pos(1)));
-  CHECK((a.particles.pos(0) != c.particles.pos(0)));
+  CHECK((a.particles.x[0] == b.particles.x[0]));  // (parenthesised: no element-wise printing)
+  CHECK((a.particles.x[1] == b.particles.x[1]));
+  CHECK((a.particles.x[0] != c.particles.x[0]));
 }
 
 TEST_CASE("mirror copy: the flyer is the target reflected about the impact plane", "[porous]") {
   Particles P;
   P.resize(3);
-  P.pos(0) = {1, 2, 3};
-  P.pos(1) = {0.5, 1.5, 2.5};
+  P.x[0] = {1, 2, 3};
+  P.x[1] = {0.5, 1.5, 2.5};
   const Particles Q = mirror(P, kImpactAxis, 0.0);
-  CHECK(Q.pos(0) == P.pos(0));
-  CHECK(Q.pos(1) == std::vector<double>{-0.5, -1.5, -2.5});
+  CHECK(Q.x[0] == P.x[0]);
+  CHECK(Q.x[1] == std::vector<double>{-0.5, -1.5, -2.5});
 }
 
 TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verification][porous][stability]") {
@@ -97,7 +97,7 @@ TEST_CASE("a 50 % porous block on the wall at 1000 m/s runs stably", "[verificat
   bool finite = true;
   double Tmax = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    finite = finite && std::isfinite(P.p[i]) && std::isfinite(P.e[i]) && std::isfinite(P.pos(0)[i]) && P.V[i] > 0;
+    finite = finite && std::isfinite(P.p[i]) && std::isfinite(P.e[i]) && std::isfinite(P.x[0][i]) && P.V[i] > 0;
     Tmax = std::max(Tmax, sim.thermo()[0].temperature(P.m[i] / P.V[i], P.e[i]));
   }
   WARN("energy error (worst) " << worst << ", T max " << Tmax << " K, steps " << sim.steps());
@@ -129,7 +129,7 @@ TEST_CASE("a porous body in free flight keeps its round-off (mid-step energy, up
   double pmax = 0.0, dvmax = 0.0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     pmax = std::max(pmax, std::fabs(P.p[i]));
-    dvmax = std::max(dvmax, std::hypot(P.vel(0)[i], P.vel(1)[i] + 1000.0));
+    dvmax = std::max(dvmax, std::hypot(P.v[0][i], P.v[1][i] + 1000.0));
   }
   const double dE = sim.energy().total() / E0 - 1.0;
   WARN("free flight, 160 ns (" << sim.steps() << " steps): max |P| " << pmax << " Pa, max |v - v0| " << dvmax
@@ -145,8 +145,8 @@ TEST_CASE("void sides: the faces of a void across the impact direction lie in di
   // a void of radius 1 at the origin; points above, below, beside it, and one far away
   const double xs[] = {0.0, 0.0, 1.5, 0.0}, ys[] = {1.2, -1.2, 0.1, 10.0};
   for (int i = 0; i < 4; ++i) {
-    P.pos(0)[i] = xs[i];
-    P.pos(1)[i] = ys[i];
+    P.x[0][i] = xs[i];
+    P.x[1][i] = ys[i];
   }
   assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 0.0);
   CHECK(int(P.field[0]) == 1);  // above: field 1
@@ -154,7 +154,7 @@ TEST_CASE("void sides: the faces of a void across the impact direction lie in di
   CHECK(int(P.field[2]) == 1);  // beside, just above the centre
   CHECK(int(P.field[3]) == 0);  // beyond reach of every void
   // periodic x: a void across the seam
-  P.pos(0)[0] = 9.9;
+  P.x[0][0] = 9.9;
   assign_void_sides(P, {{0.1, 0.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 10.0);
   CHECK(int(P.field[0]) == 1);
 }
@@ -166,8 +166,8 @@ TEST_CASE("void sides, four fields: the faces across and along the impact direct
   // and one beyond reach; the impact direction is y, so field = (above) + 2 (right: (x - c) x s > 0)
   const double xs[] = {0.8, -0.8, 0.8, -0.8, 0.0}, ys[] = {0.8, 0.8, -0.8, -0.8, 10.0};
   for (int i = 0; i < 5; ++i) {
-    P.pos(0)[i] = xs[i];
-    P.pos(1)[i] = ys[i];
+    P.x[0][i] = xs[i];
+    P.x[1][i] = ys[i];
   }
   assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 0.0, 4);
   CHECK(int(P.field[0]) == 3);
@@ -267,7 +267,7 @@ TEST_CASE("separated void faces: bitwise the same on 1 and 2 threads", "[porous]
     Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
     while (sim.time() < 15e-9) sim.step(15e-9 - sim.time());
     const auto e = sim.energy();
-    return std::array<double, 4>{e.kinetic, e.internal, sim.removed().contact, sim.particles().pos(0)[17]};
+    return std::array<double, 4>{e.kinetic, e.internal, sim.removed().contact, sim.particles().x[0][17]};
   };
   const int before = omp_get_max_threads();
   const auto a = run(1), b = run(2);

@@ -39,7 +39,7 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 std::vector<double> row_mean(const Particles& P, const kern::GridGeom& g, const std::vector<double>& value) {
   std::vector<double> sum(g.n[1], 0.0), cnt(g.n[1], 0.0);
   for (std::size_t i = 0; i < P.size(); ++i) {
-    const int r = static_cast<int>((P.pos(1)[i] - g.lo[1]) / g.h);
+    const int r = static_cast<int>((P.x[1][i] - g.lo[1]) / g.h);
     if (r < 0 || r >= g.n[1]) continue;
     sum[r] += value[i];
     cnt[r] += 1;
@@ -78,7 +78,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
       // elastic precursor: leading edge where the row mean of -sigma_yy passes HEL / 2
       const auto& P = sim.particles();
       std::vector<double> syy(P.size());
-      for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + (P.q.empty() ? 0.0 : P.q[i]) - P.dev(1)[i];
+      for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + (P.q.empty() ? 0.0 : P.q[i]) - P.s[1][i];
       const auto row = row_mean(P, g, syy);
       for (int k = g.n[1] - 1; k > 0; --k)
         if (row[k] > 0.5 * hel) {
@@ -99,8 +99,8 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   const Thermo th(mat);
   double n = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
-    r.finite = r.finite && std::isfinite(P.p[i]) && std::isfinite(P.vel(1)[i]) && P.V[i] > 0;
-    if (P.pos(1)[i] < 100e-6 || P.pos(1)[i] > front - 20 * g.h) continue;
+    r.finite = r.finite && std::isfinite(P.p[i]) && std::isfinite(P.v[1][i]) && P.V[i] > 0;
+    if (P.x[1][i] < 100e-6 || P.x[1][i] > front - 20 * g.h) continue;
     const double rho = P.m[i] / P.V[i];
     r.P += P.p[i];
     r.rho += rho;
@@ -112,7 +112,7 @@ ImpactResult run_impact(const std::string& file, const std::vector<std::string>&
   r.T /= n;
   // precursor amplitude: -sigma_yy midway between the plastic front and the precursor front
   std::vector<double> syy(P.size());
-  for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + P.q[i] - P.dev(1)[i];
+  for (std::size_t i = 0; i < P.size(); ++i) syy[i] = P.p[i] + P.q[i] - P.s[1][i];
   const auto row = row_mean(P, g, syy);
   const double ymid = 0.5 * (front + yp.back());
   r.precursor_amplitude = row[static_cast<int>((ymid - g.lo[1]) / g.h)];
