@@ -1,6 +1,8 @@
 // The engine's geometry over kern::kDim axes: positions and velocities, boxes, the impact axis,
 // and loops over boxes of lattice indices.
 #pragma once
+#include <cmath>
+
 #include "kernels/tensor.hpp"
 
 namespace smpm {
@@ -18,6 +20,12 @@ using Index = kern::Vec<kern::kDim, long>;
 struct Box {
   Vector lo{}, hi{};
 };
+
+// |v|, by std::hypot (no overflow or underflow in the squares).
+inline double magnitude(const Vector& v) {
+  if constexpr (kern::kDim == 2) return std::hypot(v[0], v[1]);
+  else return std::hypot(v[0], v[1], v[2]);
+}
 
 // Whether p lies in the closed box [lo, hi].
 inline bool in_box(const Box& b, const Vector& p) {

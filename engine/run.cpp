@@ -255,7 +255,7 @@ toml::table body_json(const Scene& scene, std::size_t k) {
                  {"area_m2", b.area}, {"velocity_m_s", toml::array{b.velocity[0], b.velocity[1]}}, {"porosity", b.porosity},
                  {"voids", static_cast<int64_t>(b.voids)}};
   const Material& m = scene.materials[scene.body_material[k]];
-  const double up = std::hypot(b.velocity[0], b.velocity[1]);
+  const double up = magnitude(b.velocity);
   if (!m.has_hugoniot() || up <= 0.0) return bt;
   // the exact dense Hugoniot state for a stop from this speed (wall or symmetric impact)
   const auto h = hugoniot(m, up);
@@ -388,7 +388,7 @@ std::string describe_scene(const Scene& sc) {
   for (std::size_t k = 0; k < sc.bodies.size(); ++k) {
     const auto& b = sc.bodies[k];
     const Material& m = sc.materials[sc.body_material[k]];
-    const double up = std::hypot(b.velocity[0], b.velocity[1]);
+    const double up = magnitude(b.velocity);
     if (!m.has_hugoniot() || up <= 0.0) continue;
     const auto h = hugoniot(m, up);
     if (!h.in_range) {
