@@ -170,6 +170,12 @@ struct Raster {
 
 // Marks the pixels whose centre lies in a body point's disk, radius * sqrt(V_p) capped at rmax.
 void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
+  // the raster's geometry in locals: a store into the image (bytes) could alias the members
+  const Vector lo = R.lo, step = R.step;
+  const Index n = R.n;
+  bool wrap[kDim];
+  for (int d = 0; d < kDim; ++d) wrap[d] = R.wrap[d];
+  std::uint8_t* img = R.img.data();
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
     const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
@@ -177,21 +183,21 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
     Index first, last;  // the pixels of the disk's bounding box (those of a wrapping axis unwrapped)
     for (int d = 0; d < kDim; ++d) {
       c[d] = P.x[d][p];
-      first[d] = static_cast<long>(std::ceil((c[d] - rad - R.lo[d]) / R.step[d] - 0.5));
-      last[d] = static_cast<long>(std::floor((c[d] + rad - R.lo[d]) / R.step[d] - 0.5));
-      if (!R.wrap[d]) {
+      first[d] = static_cast<long>(std::ceil((c[d] - rad - lo[d]) / step[d] - 0.5));
+      last[d] = static_cast<long>(std::floor((c[d] + rad - lo[d]) / step[d] - 0.5));
+      if (!wrap[d]) {
         first[d] = std::max(0L, first[d]);
-        last[d] = std::min(R.n[d] - 1, last[d]);
+        last[d] = std::min(n[d] - 1, last[d]);
       }
     }
     for_each_index(first, last, [&](const Index& i) {
       double e[kDim];  // pixel centre - point [m]
-      for (int d = 0; d < kDim; ++d) e[d] = R.lo[d] + (i[d] + 0.5) * R.step[d] - c[d];
+      for (int d = 0; d < kDim; ++d) e[d] = lo[d] + (i[d] + 0.5) * step[d] - c[d];
       if (kern::norm2(e) > r2) return;
       Index w = i;
       for (int d = 0; d < kDim; ++d)
-        if (R.wrap[d]) w[d] = ((w[d] % R.n[d]) + R.n[d]) % R.n[d];
-      R.img[R.at(w)] = 1;
+        if (wrap[d]) w[d] = ((w[d] % n[d]) + n[d]) % n[d];
+      img[linear_index(w, n)] = 1;
     });
   }
 }

@@ -42,8 +42,8 @@ void for_each_index(const Index& first, const Index& last, F&& f) {
     if (first[d] > last[d]) return;
   Index i = first;
   for (;;) {
-    f(static_cast<const Index&>(i));
-    int d = 0;
+    for (i[0] = first[0]; i[0] <= last[0]; ++i[0]) f(static_cast<const Index&>(i));
+    int d = 1;
     while (d < kern::kDim && i[d] == last[d]) {
       i[d] = first[d];
       ++d;
