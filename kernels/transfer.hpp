@@ -160,7 +160,7 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
   const std::size_t foff = Contact ? sink.field_offset(P.field(p)) : 0;
   const double mh = m * inv_h, Vp = Contact ? P.V[p] : 0.0;
   const std::size_t first = sink.node(node_of(st, Idx<D>{})) + foff;
-  st.for_each_by_line([&](const Idx<D>& a, int) {
+  const auto node = [&](const Idx<D>& a, int) {
     const std::size_t n = node_index(sink, first, a);
     const double w = st.weight(a);
     double q[D];
@@ -194,7 +194,12 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
       }
       if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
     }
-  });
+ };
+  // one field: by lines, the fewest instructions on node addresses; several fields: fully
+  // unrolled, which measures faster there (docs/performance.md, "What was tried")
+  if constexpr (Contact) st.for_each(node);
+  else st.for_each_by_line(node);
+
 }
 
 // Scatter of the particles at sorted positions [s0, s1) into a sink.
