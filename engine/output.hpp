@@ -36,7 +36,7 @@ namespace smpm {
 struct SnapshotField {
   std::string name;          // dataset name, e.g. "position", "velocity", "pressure"
   std::string units;         // e.g. "m", "m/s", "Pa" (string attribute "units")
-  int components = 1;        // 1 (scalar) or kDim (vector: components interleaved in `data`)
+  int components = 1;        // 1 (scalar) or 2 (vector: components interleaved in `data`)
   std::vector<double> data;  // n * components values
 };
 

@@ -58,7 +58,7 @@ class Simulation {
   // over the steps taken; the grid holds grid().geom.num_nodes().
   double mean_active_nodes() const { return steps_ > 0 ? box_nodes_ / double(steps_) : 0.0; }
   double last_dt() const { return last_dt_; }
-  // Whether step() stores the velocity gradient L [1/s] on the particles (particles().Lxx ...,
+  // Whether step() stores the velocity gradient L [1/s] on the particles (particles().L,
   // which the regional statistics read). Default on. Off, the constitutive update takes L from
   // the last gather pass's block buffer (kern::g2p_blocks) and the particles' L arrays keep the
   // values of the last step that stored them: 96 B less memory traffic per point and step. The

@@ -117,7 +117,7 @@ namespace {
 
 // The weld of any number of velocity fields with APIC's scatter velocity (q.scatter_velocity):
 // at a node where at least two fields hold mass and all fields together fill vmin, every field
-// present takes the centre-of-mass velocity, after the forces and before them (p / m in px, py).
+// present takes the centre-of-mass velocity, after the forces and before them (p / m in p).
 // The heating gather's scatter loss then counts 1/2 m_f |u_f - u_cm|^2 per field, together the
 // weld's loss (for two fields 1/2 mu |u_0 - u_1|^2), and the mid-step L is the single field's:
 // no contact heat (heat = 0).

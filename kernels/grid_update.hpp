@@ -30,7 +30,7 @@ struct GridUpdateParams {
   double mass_eps = 0.0;
   Walls walls;
   bool flip = false;      // also store dv = v_new - v_old
-  // Replace the momenta px, py by the scatter's velocity p / m with the walls applied (0 on
+  // Replace the momenta p by the scatter's velocity p / m with the walls applied (0 on
   // empty nodes): the APIC gather reads it for the mid-step velocity of L and for the transfer
   // heating (kernels/transfer.hpp), with no division. The walls' share: a wall node's normal
   // velocity p_n / m, zeroed here, is kinetic energy 1/2 p_n^2 / m that the wall takes out of
@@ -66,7 +66,7 @@ void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const G
 // Walls are applied again to the corrected velocities. Coulomb contact: the energy a node loses,
 // per unit of its mass, goes to G.heat (both fields' slots; 0 where nothing changed), which the
 // heating gather adds to the particles' internal energy (kern::g2p_particle). A weld (with the
-// scatter velocity in px, py) gives both fields the merged scatter velocity as well, so that the
+// scatter velocity in p) gives both fields the merged scatter velocity as well, so that the
 // heating gather's scatter loss counts its loss and G.heat stays 0. row_loss sums either.
 struct ContactParams {
   double friction = 0.0;         // Coulomb coefficient mu

@@ -5,8 +5,8 @@
 //   weight    w_i   = prod_d w_d[a_d]                       (products in axis order)
 //   gradient  g_i,d = prod_e (e == d ? dw_e[a_e] : w_e[a_e])  (grid units: divide by h for 1/m)
 //   offset    x_i,d - x_p,d = base_d + a_d - xg_d          (grid units)
-// Each value is the same product, in the same order, as the hand-written 2D loops it replaces
-// (w = wx[a] wy[b], gx = dwx[a] wy[b], gy = wx[a] dwy[b]): results are bitwise those.
+// Products run in axis order: at D = 2, w = wx[a] wy[b], gx = dwx[a] wy[b], gy = wx[a] dwy[b],
+// the order the results depend on bit for bit (scripts/bitwise_check.sh).
 #pragma once
 #include "shape.hpp"
 #include "tensor.hpp"

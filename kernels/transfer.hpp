@@ -405,8 +405,8 @@ struct G2PParams {
 // the FLIP/PIC blend. Position: moved with the grid velocity. Gradient: L = sum_i v_i grad w_i^T
 // from the updated velocity. WorkRate (the USL pass with transfer heating, g2p_blocks): also
 // the rate of the energy's work, D_mid = sym sum_i v_i^mid grad w_i^T with v_i^mid = v_i^new -
-// q.mid (v_i^new - v_i^old) (px, py hold v^old, the grid update's scatter_velocity; FLIP takes
-// v^old = v^new - dv), into Lout.wxx, wyy, wxy. The grid's kinetic energy changes by exactly dt
+// q.mid (v_i^new - v_i^old) (p holds v^old, the grid update's scatter_velocity; FLIP takes
+// v^old = v^new - dv), into Lout's work rate. The grid's kinetic energy changes by exactly dt
 // f_i . (v^old + v^new) / 2 in the explicit update, and with q.mid = 0.5 the constitutive
 // update's work dt V sigma : D_mid with the stress that made f_i (kern::constitutive_range,
 // mid-step energy) is exactly its negative: the step conserves energy node by node, partly
@@ -429,8 +429,8 @@ struct G2PParams {
 // q_i = the kinetic energy removed at node i per unit of its total mass (kern::grid_contact),
 // whose shares over the particles of both fields sum to the loss. (A weld of void faces needs
 // no such term: it gives both fields the merged scatter velocity, whose difference to each
-// field's own the scatter loss then counts.) Needs the scatter's velocity p / m in px, py (the grid update's
-// scatter_velocity, ghosts filled).
+// field's own the scatter loss then counts.) Needs the scatter's velocity p / m in p (the grid
+// update's scatter_velocity, ghosts filled).
 //
 // PureFlip (FLIP with flip_alpha = 1, velocity pass): v_p += sum_i w_ip dv_i alone; the PIC sum of
 // the blend, multiplied by 1 - alpha = 0, is neither read nor formed (half the pass's grid reads).
@@ -507,7 +507,7 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
         if constexpr (FLIP) {  // v_i^old = v_i - dv_i
           dn[d] = G.dv[d][n];
           r[d] = u[d] - gv[d] + dn[d];
-        } else {  // px, py hold the scatter's velocity p / m here
+        } else {  // p holds the scatter's velocity p / m here
           r[d] = u[d];
 #pragma GCC unroll 3
           for (int c = 0; c < D; ++c) r[d] += uC(d, c) * st.offset(a, c);
@@ -719,7 +719,7 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 // kGatherBlock doubles, 448 KiB, in L2): with store_L, L goes to the particles' arrays as with
 // g2p; else to the buffer's first four blocks, and the particles' L arrays are left as they
 // were: the 64 B per point of storing L (write and write-allocate) and the 32 B of reading it
-// back are saved. The heating USL pass's work rate D_mid (L.wxx, wyy, wxy) is always in the
+// back are saved. The heating USL pass's work rate D_mid (L.work(k)) is always in the
 // last three blocks. Acc: the per-thread
 // result of `after`, merged with Acc::merge (whose order must not matter). The gathered values
 // are those of g2p, bitwise (the same particle body; tests/test_kernels.cpp). The block size:
