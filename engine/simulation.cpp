@@ -206,9 +206,7 @@ void Simulation::merge_closed_faces() {
   const kern::MergeParams q{cfg_.void_face_volume_fraction, mass_eps_, cfg_.ugimp_lp};
   kern::with_shape(cfg_.shape, [&](auto shape) {
     const auto pv = P_.view();
-    const double* pos[kern::kDim];
-    for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.x[d];
-    kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), pos, P_.field.data(), P_.size(), q,
+    kern::merge_closed_faces<decltype(shape)>(grid_.geom, box_, grid_.view(), pv.x, P_.field.data(), P_.size(), q,
                                               node_state_.data());
   });
 }
@@ -246,9 +244,7 @@ void Simulation::sort_by_cell() {
   const auto& g = grid_.geom;
   const std::size_t n = P_.size();
   const auto pv = P_.view();
-  const double* pos[kern::kDim];
-  for (int d = 0; d < kern::kDim; ++d) pos[d] = pv.x[d];
-  const auto bad = kern::compute_keys(g, pos, n, key_.data());
+  const auto bad = kern::compute_keys(g, pv.x, n, key_.data());
   if (bad >= 0) {
     std::string span;
     for (int d = 0; d < kern::kDim; ++d)
