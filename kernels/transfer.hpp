@@ -194,7 +194,7 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
       }
       if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
     }
- };
+  };
   // one field: by lines, the fewest instructions on node addresses; several fields: fully
   // unrolled, which measures faster there (docs/performance.md, "What was tried")
   if constexpr (Contact) st.for_each(node);
