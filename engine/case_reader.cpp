@@ -171,33 +171,66 @@ double CaseReader::quantity(const std::string& key, const Quantity& q, double lo
   return quantity(key, q, lo, hi);
 }
 
-std::pair<double, double> CaseReader::pair(const std::string& key, const Quantity& q, bool increasing) {
+namespace {
+// "two numbers, e.g. [0, 1]", "3 numbers, e.g. [0, 1, 2]"
+std::string count_example(std::size_t count) {
+  std::string e = (count == 2 ? std::string("two") : std::to_string(count)) + " numbers, e.g. [";
+  for (std::size_t i = 0; i < count; ++i) e += (i ? ", " : "") + std::to_string(i);
+  return e + "]";
+}
+}  // namespace
+
+std::vector<double> CaseReader::numbers(const std::string& key, const Quantity& q, std::size_t count) {
   auto [k, f] = find_quantity(key, q);
   if (k.empty()) {
     std::vector<std::string> names;
     for (const auto& [suf, ff] : q.suffixes) names.push_back(key + "_" + suf);
     if (names.empty()) names.push_back(key);
-    required(names, "two numbers, e.g. [0, 1]; accepted spellings: " + join(names));
+    required(names, count_example(count) + "; accepted spellings: " + join(names));
   }
   const toml::node* n = find(k);
   const toml::array* a = n->as_array();
-  if (!a || a->size() != 2 || !as_number(*a->get(0)) || !as_number(*a->get(1)))
-    fail(k, "expected two numbers, e.g. [0, 1], got " + shown(*n));
-  const double v0 = *as_number(*a->get(0)), v1 = *as_number(*a->get(1));
-  if (!std::isfinite(v0) || !std::isfinite(v1)) fail(k, "values must be finite");
-  if (increasing && !(v0 < v1)) fail(k, "[" + fmt(v0) + ", " + fmt(v1) + "]: the first value must be below the second");
-  toml::array r{v0, v1};
+  bool ok = a && a->size() == count;
+  for (std::size_t i = 0; ok && i < count; ++i) ok = as_number(*a->get(i)).has_value();
+  if (!ok) fail(k, "expected " + count_example(count) + ", got " + shown(*n));
+  std::vector<double> v(count);
+  toml::array r;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double x = *as_number(*a->get(i));
+    if (!std::isfinite(x)) fail(k, "values must be finite");
+    r.push_back(x);
+    v[i] = x * f;
+  }
   out_->insert_or_assign(k, std::move(r));
-  return {v0 * f, v1 * f};
+  return v;
+}
+
+std::vector<double> CaseReader::numbers(const std::string& key, const Quantity& q, std::size_t count,
+                                        const std::vector<double>& def_si) {
+  auto [k, f] = find_quantity(key, q);
+  if (k.empty()) {
+    toml::array r;
+    for (const double x : def_si) r.push_back(x);
+    out_->insert_or_assign(q.suffixes.empty() ? key : key + "_" + q.suffixes.front().first, std::move(r));
+    return def_si;
+  }
+  return numbers(key, q, count);
+}
+
+std::pair<double, double> CaseReader::pair(const std::string& key, const Quantity& q, bool increasing) {
+  const std::vector<double> v = numbers(key, q, 2);
+  if (increasing && !(v[0] < v[1])) {
+    const auto [k, f] = find_quantity(key, q);
+    fail(k, "[" + fmt(v[0] / f) + ", " + fmt(v[1] / f) + "]: the first value must be below the second");
+  }
+  return {v[0], v[1]};
 }
 
 std::pair<double, double> CaseReader::pair(const std::string& key, const Quantity& q, bool increasing,
                                            std::pair<double, double> def) {
-  auto [k, f] = find_quantity(key, q);
-  if (k.empty()) {
-    toml::array r{def.first, def.second};
-    out_->insert_or_assign(q.suffixes.empty() ? key : key + "_" + q.suffixes.front().first, std::move(r));
-    return def;
+  if (find_quantity(key, q).first.empty()) {
+    const std::vector<double> v = numbers(key, q, 2, {def.first, def.second});
+    return {v[0], v[1]};
   }
   return pair(key, q, increasing);
 }

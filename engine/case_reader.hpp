@@ -39,6 +39,10 @@ class CaseReader {
   // Quantity in SI units. Exactly one of key_<suffix> may be present.
   double quantity(const std::string& key, const Quantity& q, double lo, double hi);
   double quantity(const std::string& key, const Quantity& q, double lo, double hi, double def);
+  // An array of `count` numbers in SI units, e.g. center_um = [10, 20, 30].
+  std::vector<double> numbers(const std::string& key, const Quantity& q, std::size_t count);
+  std::vector<double> numbers(const std::string& key, const Quantity& q, std::size_t count,
+                              const std::vector<double>& def_si);
   // Two-element array, e.g. x_range_um = [0, 400]; requires first < second when `increasing`.
   std::pair<double, double> pair(const std::string& key, const Quantity& q, bool increasing);
   std::pair<double, double> pair(const std::string& key, const Quantity& q, bool increasing,

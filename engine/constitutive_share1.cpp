@@ -1,9 +1,10 @@
 // The constitutive updates of the EOS models at even (share 0) or odd (share 1) index in
 // EosModel (see engine/material.hpp).
+#include "kernels/dimension.hpp"
 #include "engine/material.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 template const ConstitutiveFn* constitutive_share<1>();
 
-}  // namespace smpm
+}  // namespace SMPM_NS

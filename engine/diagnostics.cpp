@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/diagnostics.hpp"
 
 #include <algorithm>
@@ -5,7 +6,7 @@
 #include <limits>
 #include <optional>
 
-namespace smpm {
+namespace SMPM_NS {
 
 double front_position(const Particles& P, std::uint8_t body, double u0, double lo, double h, int rows,
                       bool from_top) {
@@ -332,4 +333,4 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
   return area;
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

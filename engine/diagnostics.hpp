@@ -1,5 +1,6 @@
 // Diagnostics computed from the particle state during a run.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -10,7 +11,7 @@
 #include "engine/thermo.hpp"
 #include "kernels/tensor.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 // Leading edge of the compression wave in one body, along the impact axis. The body's particles
 // are binned in `rows` rows of height `h` (the cell size) from `lo` along that axis; a row is
@@ -104,4 +105,4 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,
                                       const std::vector<int>& body_material, bool gradient_current = true);
 
-}  // namespace smpm
+}  // namespace SMPM_NS

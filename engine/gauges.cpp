@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/gauges.hpp"
 
 #include <algorithm>
@@ -10,7 +11,7 @@
 #include "engine/diagnostics.hpp"
 #include "engine/simulation.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 NearestPoint nearest_point(const Particles& P, const Vector& at, const std::vector<bool>& in_body) {
   NearestPoint best{P.size(), std::numeric_limits<double>::infinity()};
@@ -173,4 +174,4 @@ void PointRecorder::surface_rows(std::ostream& o, const Simulation& sim) {
     csv_row(o, kSurfaceColumns, SurfaceRow{sim.time(), surfaces_[k].body_name, u[k]});
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

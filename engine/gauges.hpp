@@ -4,6 +4,7 @@
 // so the arrays' permutation does not lose it; a resumed run follows the same ids (PointRecorder
 // stores them in its checkpoint).
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <ostream>
@@ -15,9 +16,12 @@
 #include "kernels/tensor.hpp"
 
 namespace smpm {
-
 class CheckpointWriter;
 class CheckpointReader;
+}  // namespace smpm
+
+namespace SMPM_NS {
+
 class Simulation;
 
 // A gauge: the material point nearest a position at t = 0 (case table [[gauges]]).
@@ -93,4 +97,4 @@ class PointRecorder {
   std::size_t n_points_ = 0;
 };
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,11 +1,13 @@
 // The engine's geometry over kern::kDim axes: positions and velocities, boxes, the impact axis,
 // and loops over boxes of lattice indices.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cmath>
 
 #include "kernels/tensor.hpp"
+#include "kernels/views.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 // The axis the shock travels along (y): impact velocities, mirror copies, the front, the bands
 // of [[regions]] and free surfaces are taken along it; the other axes are lateral.
@@ -53,6 +55,13 @@ void for_each_index(const Index& first, const Index& last, F&& f) {
   }
 }
 
+// The period of each axis [m]: the grid's length along a periodic axis, 0 along the others.
+inline Vector periods(const kern::GridGeom& g) {
+  Vector p{};
+  for (int d = 0; d < kern::kDim; ++d) p[d] = g.wrap[d] ? g.length(d) : 0.0;
+  return p;
+}
+
 // Position of index i in a row-major array of n[0] x n[1] x ... entries, axis 0 fastest.
 inline long linear_index(const Index& i, const Index& n) {
   long k = i[kern::kDim - 1];
@@ -60,4 +69,4 @@ inline long linear_index(const Index& i, const Index& n) {
   return k;
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -2,6 +2,7 @@
 // quantities one array per axis, and the halo phase (the periodic fold and ghost fill) over
 // arrays named by NodeArray.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <array>
 #include <initializer_list>
 #include <vector>
@@ -9,7 +10,7 @@
 #include "kernels/grid_update.hpp"
 #include "kernels/views.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 // The node arrays the halo phase takes by name. A vector name stands for its kDim arrays; an
 // array the scene does not allocate is skipped.
@@ -120,4 +121,4 @@ struct Grid {
   }
 };
 
-}  // namespace smpm
+}  // namespace SMPM_NS

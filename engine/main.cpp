@@ -8,8 +8,7 @@
 #include <iostream>
 
 #include "engine/case_reader.hpp"
-#include "engine/run.hpp"
-#include "engine/scene.hpp"
+#include "engine/driver.hpp"
 
 namespace {
 
@@ -80,23 +79,28 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
+    smpm::RunSummary s;
     if (resume->parsed()) {
       const smpm::RunOptions opt{resume_dir, threads, quiet, false, command_line(argc, argv)};
-      const auto s = smpm::resume_run(resume_dir, opt);
-      if (s.output_failed) return 1;
-      return s.status == "completed" ? 0 : 3;
+      const smpm::ResumePoint point = smpm::find_resume_point(resume_dir);
+      s = smpm::case_dimension(point.doc) == 3 ? smpm::Engine<3>::resume(resume_dir, point, opt)
+                                                : smpm::Engine<2>::resume(resume_dir, point, opt);
+    } else {
+      auto doc = smpm::parse_case_file(case_file);
+      smpm::apply_overrides(doc, sets);
+      const std::filesystem::path path(case_file);
+      const std::string name = path.stem().string();
+      const int dim = smpm::case_dimension(doc);
+      if (check->parsed()) {
+        std::cout << (dim == 3 ? smpm::Engine<3>::check(doc, name, path.parent_path())
+                               : smpm::Engine<2>::check(doc, name, path.parent_path()));
+        return 0;
+      }
+      const smpm::RunOptions opt{out_dir, threads, quiet, overwrite, command_line(argc, argv)};
+      smpm::check_output_dir(smpm::output_dir(opt, name), overwrite);
+      s = dim == 3 ? smpm::Engine<3>::run(doc, name, path.parent_path(), opt)
+                   : smpm::Engine<2>::run(doc, name, path.parent_path(), opt);
     }
-    auto doc = smpm::parse_case_file(case_file);
-    smpm::apply_overrides(doc, sets);
-    const std::filesystem::path path(case_file);
-    smpm::RunOptions opt{out_dir, threads, quiet, overwrite, command_line(argc, argv)};
-    if (run->parsed()) smpm::check_output_dir(smpm::output_dir(opt, path.stem().string()), overwrite);
-    smpm::Scene scene = smpm::build_scene(doc, path.stem().string(), path.parent_path());
-    if (check->parsed()) {
-      std::cout << smpm::describe_scene(scene);
-      return 0;
-    }
-    const auto s = smpm::run_scene(scene, opt);
     if (s.output_failed) return 1;
     return s.status == "completed" ? 0 : 3;
   } catch (const smpm::CaseError& e) {

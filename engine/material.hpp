@@ -6,6 +6,7 @@
 // register them. with_material() maps the run-time choice onto the templated constitutive
 // kernel, once per range of points, so a scene pays only for the parts it uses.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <array>
 #include <cstddef>
 #include <optional>
@@ -16,11 +17,13 @@
 
 #include "kernels/constitutive.hpp"
 
-namespace smpm {
-
 // Units of case-file quantities (engine/case_reader.hpp).
+namespace smpm {
 struct Quantity;
 extern const Quantity kVelocity, kStress;
+}  // namespace smpm
+
+namespace SMPM_NS {
 
 // The elastic constants every material has; the models derive their parts from them.
 struct ElasticConstants {
@@ -243,4 +246,4 @@ inline kern::ConstitutiveResult constitutive_block(const Material& mat, const ke
   return updates[i](mat, P, S, L, first, last, q, sel);
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,10 +1,11 @@
+#include "kernels/dimension.hpp"
 #include "engine/particles.hpp"
 
 #include <utility>
 
 #include "kernels/sort.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 void Particles::resize(std::size_t n) {
   for_each_double([n](const FieldName&, std::vector<double>& a) { a.resize(n, 0.0); });
@@ -100,4 +101,4 @@ void Particles::append(const Particles& o) {
   }
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

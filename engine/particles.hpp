@@ -2,6 +2,7 @@
 // the fields its models need: the optional ones below stay empty unless enabled
 // (Particles::enable, enable_affine; fields_in_use lists those allocated).
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -10,7 +11,7 @@
 
 #include "kernels/views.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 inline constexpr int kSym = kern::sym_size(kern::kDim);  // symmetric tensor components
 
@@ -97,4 +98,4 @@ struct Particles {
   void append(const Particles& o);
 };
 
-}  // namespace smpm
+}  // namespace SMPM_NS

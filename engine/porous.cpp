@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/porous.hpp"
 
 #include <algorithm>
@@ -7,7 +8,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace smpm {
+namespace SMPM_NS {
 
 namespace {
 
@@ -54,47 +55,44 @@ struct Removal {
   std::size_t count = 0;
 };
 
-// Removes the points within the void v: the void's rows along axis 0 (x) within the body, and in
-// each row its sites within the body (or within one period of pa lattice steps, pa > 0: axis 0
-// wraps), so that a void far larger than the body costs no more than the body.
-void remove_in_void(const SiteIndex& S, double step, const Vector& origin, long pa, const Void& v, Removal& R) {
+// Removes the points within the void v: the lattice sites of its bounding box within the body,
+// or, along an axis with a period of p[d] > 0 lattice steps, within one period (the distance to
+// the void's nearest periodic image), so that a void far larger than the body costs no more than
+// the body.
+void remove_in_void(const SiteIndex& S, double step, const Vector& origin, const Index& p, const Void& v,
+                    Removal& R) {
   const double rad = v.r;
-  const long a0 = S.first[0], na = S.n[0];
-  Index first{}, last{};  // the rows: lattice indices of the other axes, axis 0 left at 0
-  for (int d = 1; d < kDim; ++d) {
+  Index first{}, last{};
+  for (int d = 0; d < kDim; ++d) {
     const double c0 = std::floor((v.c[d] - rad - origin[d]) / step), c1 = std::floor((v.c[d] + rad - origin[d]) / step);
-    first[d] = static_cast<long>(std::max(c0, double(S.first[d])));
-    last[d] = static_cast<long>(std::min(c1, double(S.first[d] + S.n[d] - 1)));
+    if (p[d] > 0 && c1 - c0 + 1.0 >= double(p[d])) {  // the void spans the period
+      first[d] = S.first[d];
+      last[d] = S.first[d] + p[d] - 1;
+    } else if (p[d] > 0) {
+      first[d] = static_cast<long>(c0);
+      last[d] = static_cast<long>(c1);
+    } else {
+      first[d] = static_cast<long>(std::max(c0, double(S.first[d])));
+      last[d] = static_cast<long>(std::min(c1, double(S.first[d] + S.n[d] - 1)));
+    }
   }
-  for_each_index(first, last, [&](const Index& row) {
-    double e[kDim] = {};  // site - centre [m]; e[0] per site
-    double across = 0.0;  // squared distance of the row from the centre [m^2]
-    for (int d = 1; d < kDim; ++d) {
-      e[d] = origin[d] + (row[d] + 0.5) * step - v.c[d];
-      across = d == 1 ? e[d] * e[d] : across + e[d] * e[d];
-    }
-    const double half = std::sqrt(std::max(0.0, rad * rad - across));
-    double ca0 = std::floor((v.c[0] - half - origin[0]) / step), ca1 = std::floor((v.c[0] + half - origin[0]) / step);
-    const bool whole_row = pa > 0 && 2.0 * half >= double(pa) * step;  // the chord spans the period
-    if (whole_row) {
-      ca0 = double(a0);
-      ca1 = double(a0 + pa - 1);
-    } else if (pa == 0) {
-      ca0 = std::max(ca0, double(a0));
-      ca1 = std::min(ca1, double(a0 + na - 1));
-    }
-    for (long a = static_cast<long>(ca0); a <= static_cast<long>(ca1); ++a) {
-      e[0] = origin[0] + (a + 0.5) * step - v.c[0];
-      if (!whole_row && kern::norm2(e) >= rad * rad) continue;
-      Index site = row;
-      site[0] = a;
-      if (pa > 0) site[0] = a0 + (((a - a0) % pa) + pa) % pa;  // wrap into the periodic strip
-      if (site[0] < a0 || site[0] >= a0 + na) continue;
-      const std::int64_t i = S.site[S.at(site)];
-      if (i >= 0 && !R.removed[static_cast<std::size_t>(i)]) {
-        R.removed[static_cast<std::size_t>(i)] = 1;
-        ++R.count;
+  for_each_index(first, last, [&](const Index& a) {
+    double e[kDim];  // site - centre [m], to the nearest image along a periodic axis
+    Index site = a;
+    for (int d = 0; d < kDim; ++d) {
+      e[d] = origin[d] + (a[d] + 0.5) * step - v.c[d];
+      if (p[d] > 0) {
+        const double L = double(p[d]) * step;
+        e[d] -= L * std::round(e[d] / L);
+        site[d] = S.first[d] + (((a[d] - S.first[d]) % p[d]) + p[d]) % p[d];  // wrap into the period
       }
+      if (site[d] < S.first[d] || site[d] >= S.first[d] + S.n[d]) return;
+    }
+    if (kern::norm2(e) >= rad * rad) return;
+    const std::int64_t i = S.site[S.at(site)];
+    if (i >= 0 && !R.removed[static_cast<std::size_t>(i)]) {
+      R.removed[static_cast<std::size_t>(i)] = 1;
+      ++R.count;
     }
   });
 }
@@ -119,7 +117,7 @@ Particles keep_unremoved(const Particles& P, const Removal& R) {
 }  // namespace
 
 PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Box& box, const VoidSpec& spec,
-                       double period) {
+                       const Vector& period) {
   const bool listed = !spec.centers.empty();
   if (!listed && spec.radius <= 0.0) throw std::invalid_argument("void radius must be positive");
   if (!listed && (spec.radius_spread < 0.0 || spec.radius_spread >= spec.radius))
@@ -134,7 +132,8 @@ PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Bo
   std::vector<std::uniform_real_distribution<double>> uc;  // centres, per axis
   for (int d = 0; d < kDim; ++d) uc.emplace_back(box.lo[d], box.hi[d]);
   std::uniform_real_distribution<double> ur(spec.radius - spec.radius_spread, spec.radius + spec.radius_spread);
-  const long pa = period > 0.0 ? std::lround(period / step) : 0;  // period in lattice steps
+  Index pa;  // the periods in lattice steps
+  for (int d = 0; d < kDim; ++d) pa[d] = period[d] > 0.0 ? std::lround(period[d] / step) : 0;
   PorousResult r;
   const long max_voids = listed ? static_cast<long>(spec.centers.size())
                                 : std::min(spec.count >= 0 ? spec.count : spec.max_voids, spec.max_voids);
@@ -166,31 +165,31 @@ Particles mirror(const Particles& P, int axis, double plane) {
   return Q;
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS
 
-namespace smpm {
+namespace SMPM_NS {
 
 namespace {
 
 // Voids binned into buckets: n[d] along axis d, of size size[d] from lo[d] (the voids' lowest
-// centre); wrap[d]: axis d is periodic with `period` and its buckets tile the period.
+// centre); wrap[d]: axis d is periodic with period[d] and its buckets tile the period.
 struct VoidBuckets {
   Vector lo, size;
   Index n;
   bool wrap[kDim];
-  double period;
+  Vector period;
   std::vector<std::vector<std::uint32_t>> voids;  // void indices per bucket, axis 0 fastest
   // the bucket index along axis d of coordinate q
   long along(int d, double q) const {
-    const double u = wrap[d] ? q - lo[d] - period * std::floor((q - lo[d]) / period) : q - lo[d];
+    const double u = wrap[d] ? q - lo[d] - period[d] * std::floor((q - lo[d]) / period[d]) : q - lo[d];
     const long b = static_cast<long>(std::floor(u / size[d]));
     return wrap[d] ? std::min(b, n[d] - 1) : b;
   }
 };
 
 // Square buckets of side B >= r_max + reach (a period's whole number of them along a periodic
-// axis 0): a point's candidates lie in its own bucket and its neighbours.
-VoidBuckets bucket_voids(const std::vector<Void>& voids, double reach, double period) {
+// axis): a point's candidates lie in its own bucket and its neighbours.
+VoidBuckets bucket_voids(const std::vector<Void>& voids, double reach, const Vector& period) {
   double rmax = 0.0;
   Vector hi;  // the highest centre [m]
   VoidBuckets K;
@@ -209,9 +208,9 @@ VoidBuckets bucket_voids(const std::vector<Void>& voids, double reach, double pe
   K.period = period;
   long buckets = 1;
   for (int d = 0; d < kDim; ++d) {
-    K.wrap[d] = d == 0 && period > 0.0;
-    K.n[d] = K.wrap[d] ? std::max(1L, static_cast<long>(period / B)) : static_cast<long>((hi[d] - K.lo[d]) / B) + 1;
-    K.size[d] = K.wrap[d] ? period / static_cast<double>(K.n[d]) : B;
+    K.wrap[d] = period[d] > 0.0;
+    K.n[d] = K.wrap[d] ? std::max(1L, static_cast<long>(period[d] / B)) : static_cast<long>((hi[d] - K.lo[d]) / B) + 1;
+    K.size[d] = K.wrap[d] ? period[d] / static_cast<double>(K.n[d]) : B;
     buckets *= K.n[d];
   }
   K.voids.resize(static_cast<std::size_t>(buckets));
@@ -232,8 +231,8 @@ double dot(const double* a, const Vector& b) {
 
 }  // namespace
 
-void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach, double period,
-                       int nfields) {
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach,
+                       const Vector& period, int nfields) {
   if (nfields != 2 && nfields != 4)
     throw std::invalid_argument("assign_void_sides: nfields must be 2 or 4, got " + std::to_string(nfields));
   const bool across = nfields == 4;
@@ -275,7 +274,7 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vecto
         double e[kDim];  // x - c [m]
         for (int d = 0; d < kDim; ++d) {
           e[d] = x[d] - v.c[d];
-          if (K.wrap[d]) e[d] -= period * std::round(e[d] / period);
+          if (K.wrap[d]) e[d] -= period[d] * std::round(e[d] / period[d]);
         }
         const double dist = std::sqrt(kern::norm2(e)) - v.r;
         if (dist < best) {
@@ -289,4 +288,4 @@ void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vecto
   }
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -2,6 +2,7 @@
 // dense lattice of points. Void centres are uniform in the body's rectangle; every point within
 // a void's radius is removed; voids may overlap. The porosity is the fraction of points removed.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -9,7 +10,7 @@
 #include "engine/geometry.hpp"
 #include "engine/particles.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 struct Void {
   Vector c{};    // centre [m]
@@ -33,11 +34,12 @@ struct PorousResult {
 };
 
 // Cuts voids from the points of P: one body on the lattice of spacing `step` whose points sit at
-// origin + (i + 1/2) step (i a lattice index per axis), inside the half-open box [lo, hi). With
-// `period` > 0 distances along axis 0 (x) wrap with that period (periodic sides), so voids cross
-// the side boundaries. P is compacted in place, keeping the order of the rest.
+// origin + (i + 1/2) step (i a lattice index per axis), inside the half-open box [lo, hi). Along
+// an axis with period[d] > 0 distances wrap with that period (periodic sides, geometry.hpp's
+// periods), so voids cross the side boundaries. P is compacted in place, keeping the order of the
+// rest.
 PorousResult cut_voids(Particles& P, double step, const Vector& origin, const Box& box, const VoidSpec& spec,
-                       double period);
+                       const Vector& period);
 
 // Mirror image of P about the plane where axis `axis` is `plane` [m] (for the symmetric two-body
 // collision): positions and velocities along that axis reflected.
@@ -47,13 +49,13 @@ Particles mirror(const Particles& P, int axis, double plane);
 // nearest void (nearest surface, |x - c| - r) it lies on along the unit direction s (the impact
 // direction): 1 where (x - c) . s > 0. The two faces of a void that a shock closes along s then
 // lie in different fields, which approach each other freely until they meet (kern::grid_contact,
-// weld). Points with no void within `reach` [m] of their surface take field 0. period > 0:
-// distances along axis 0 (x) wrap. nfields = 4 splits each side again across s: field + 2 where
+// weld). Points with no void within `reach` [m] of their surface take field 0. Along an axis
+// with period[d] > 0 distances wrap. nfields = 4 splits each side again across s: field + 2 where
 // (x - c) . t > 0, t = (s_y, -s_x) (s turned by -90 degrees in the plane of axes 0 and 1:
 // (x - c) . t is the cross product (x - c) x s at D = 2), so that the faces of a void that close
 // across s (a void a few cells wide collapses from all sides) lie in different fields too. Sets
 // P.field (0 .. nfields - 1).
-void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach, double period,
-                       int nfields = 2);
+void assign_void_sides(Particles& P, const std::vector<Void>& voids, const Vector& s, double reach,
+                       const Vector& period, int nfields = 2);
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/run.hpp"
 
 #include <omp.h>
@@ -6,6 +7,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <algorithm>
 #include <cctype>
@@ -31,7 +33,7 @@
 #include "engine/thermo.hpp"
 #include "engine/timer.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 namespace {
 
@@ -77,24 +79,39 @@ constexpr Column<SeriesRow> kSeriesColumns[] = {
 constexpr std::size_t kSeriesRegionColumn = 1;
 
 // energy.csv: one row per time
+// Extensive quantities (energy, momentum, mass) are per unit depth at D = 2 (plane strain) and
+// whole at D = 3; the columns' names and units say which.
+constexpr int kDim = kern::kDim;
+constexpr bool kPerDepth = kDim == 2;
+constexpr const char* kEnergyUnit = kPerDepth ? "J/m" : "J";
 struct EnergyRow {
   double t;  // [s]
   Simulation::Energy e;
-  std::array<double, 2> q;
+  std::array<double, kDim> q;
   Simulation::Removed removed;
-  double residual;  // [J/m]
+  double residual;  // [J/m] at D = 2, [J] at D = 3
 };
-constexpr Column<EnergyRow> kEnergyColumns[] = {
-    {"time_ns", "ns", [](const EnergyRow& r) { return r.t * 1e9; }},
-    {"kinetic_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.kinetic; }},
-    {"internal_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.internal; }},
-    {"total_J_per_m", "J/m", [](const EnergyRow& r) { return r.e.total(); }},
-    {"momentum_x_kg_m_s_per_m", "kg m/s per m", [](const EnergyRow& r) { return r.q[0]; }},
-    {"momentum_y_kg_m_s_per_m", "kg m/s per m", [](const EnergyRow& r) { return r.q[1]; }},
-    {"wall_removed_J_per_m", "J/m", [](const EnergyRow& r) { return r.removed.wall; }},
-    {"contact_removed_J_per_m", "J/m", [](const EnergyRow& r) { return r.removed.contact; }},
-    {"residual_J_per_m", "J/m", [](const EnergyRow& r) { return r.residual; }},
-};
+constexpr auto kEnergyColumns = [] {
+  std::array<Column<EnergyRow>, 7 + kDim> c{};
+  int i = 0;
+  c[i++] = {"time_ns", "ns", [](const EnergyRow& r) { return r.t * 1e9; }};
+  c[i++] = {kPerDepth ? "kinetic_J_per_m" : "kinetic_J", kEnergyUnit, [](const EnergyRow& r) { return r.e.kinetic; }};
+  c[i++] = {kPerDepth ? "internal_J_per_m" : "internal_J", kEnergyUnit,
+            [](const EnergyRow& r) { return r.e.internal; }};
+  c[i++] = {kPerDepth ? "total_J_per_m" : "total_J", kEnergyUnit, [](const EnergyRow& r) { return r.e.total(); }};
+  constexpr const char* kMomentum[2][3] = {{"momentum_x_kg_m_s", "momentum_y_kg_m_s", "momentum_z_kg_m_s"},
+                                           {"momentum_x_kg_m_s_per_m", "momentum_y_kg_m_s_per_m", ""}};
+  constexpr const char* kMomentumUnit = kPerDepth ? "kg m/s per m" : "kg m/s";
+  c[i++] = {kMomentum[kPerDepth][0], kMomentumUnit, [](const EnergyRow& r) { return r.q[0]; }};
+  c[i++] = {kMomentum[kPerDepth][1], kMomentumUnit, [](const EnergyRow& r) { return r.q[1]; }};
+  if constexpr (kDim == 3) c[i++] = {kMomentum[0][2], kMomentumUnit, [](const EnergyRow& r) { return r.q[kDim - 1]; }};
+  c[i++] = {kPerDepth ? "wall_removed_J_per_m" : "wall_removed_J", kEnergyUnit,
+            [](const EnergyRow& r) { return r.removed.wall; }};
+  c[i++] = {kPerDepth ? "contact_removed_J_per_m" : "contact_removed_J", kEnergyUnit,
+            [](const EnergyRow& r) { return r.removed.contact; }};
+  c[i++] = {kPerDepth ? "residual_J_per_m" : "residual_J", kEnergyUnit, [](const EnergyRow& r) { return r.residual; }};
+  return c;
+}();
 
 // front.csv: the compression front's position at a time
 struct FrontRow {
@@ -126,11 +143,6 @@ constexpr Column<VoidsRow> kVoidsColumns[] = {
     {"open_area_um2", "um^2", [](const VoidsRow& r) { return r.area * 1e12; }},
     {"open_fraction", "1", [](const VoidsRow& r) { return r.fraction; }},
 };
-
-// The signal that asked the run to stop (SIGINT or SIGTERM; 0: none): the run stops after the
-// current step and writes its last state, as for a batch scheduler's SIGTERM.
-std::atomic<int> g_stop_signal{0};
-extern "C" void on_stop_signal(int sig) { g_stop_signal = sig; }
 
 // An output that could not be written: the run ends "failed", exit 1 (RunSummary::output_failed).
 struct OutputError : std::runtime_error {
@@ -435,19 +447,6 @@ std::string resolved_case_text(const Scene& scene) {
   return o.str();
 }
 
-std::filesystem::path output_dir(const RunOptions& opt, const std::string& case_name) {
-  return opt.out_dir.empty() ? std::filesystem::path("out") / case_name : opt.out_dir;
-}
-
-void check_output_dir(const std::filesystem::path& out, bool overwrite) {
-  std::error_code ec;
-  if (std::filesystem::exists(out, ec) && !std::filesystem::is_directory(out, ec))
-    throw CaseError("output directory '" + out.string() + "' is a file; choose another --out");
-  if (!overwrite && std::filesystem::exists(out / "run.json", ec))
-    throw CaseError("output directory '" + out.string() + "' holds an earlier run (run.json); pass --overwrite to "
-                    "replace its results, or choose another --out");
-}
-
 namespace {
 
 // A CSV file of the run, written a whole row at a time.
@@ -732,9 +731,7 @@ RunSummary RunLoop::run(const CheckpointReader* resume) {
   write_run_json(out_ / "run.json", scene_, sim_, s_, threads_, prov_);
   t_resumed_ = sim_.time();
   if (!opt_.quiet) print_start();
-  g_stop_signal = 0;
-  std::signal(SIGINT, on_stop_signal);
-  std::signal(SIGTERM, on_stop_signal);
+  watch_stop_signals();
   wall0_ = last_progress_ = last_checkpoint_ = omp_get_wtime();
   try {
     start(resume);
@@ -821,7 +818,7 @@ void RunLoop::step_loop() {
 
 // A stop signal (a checkpoint is written) or run.max_steps ends the loop before end_time.
 bool RunLoop::stop_requested() {
-  if (const int sig = g_stop_signal) {
+  if (const int sig = stop_signal()) {
     s_.status = "interrupted";
     s_.message = std::string("interrupted by ") + (sig == SIGTERM ? "SIGTERM" : "SIGINT") + " at step " +
                  std::to_string(sim_.steps());
@@ -950,48 +947,37 @@ RunSummary run_loop(Scene& scene, const RunOptions& opt, const CheckpointReader*
 
 RunSummary run_scene(Scene& scene, const RunOptions& opt) { return run_loop(scene, opt, nullptr); }
 
-RunSummary resume_run(const std::filesystem::path& out, const RunOptions& opt) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::is_directory(out, ec)) throw CaseError("cannot resume: '" + out.string() + "' is not a directory");
-  if (fs::exists(out / "run.json", ec)) {
-    std::ifstream j(out / "run.json");
-    std::stringstream text;
-    text << j.rdbuf();
-    std::string t = text.str();
-    t.erase(std::remove_if(t.begin(), t.end(), [](unsigned char c) { return std::isspace(c); }), t.end());
-    if (t.find("\"status\":\"completed\"") != std::string::npos)
-      throw CaseError("cannot resume: the run in '" + out.string() + "' completed (run.json); nothing to continue");
-  }
-  const auto all = list_checkpoints(out);
-  if (all.empty())
-    throw CaseError("cannot resume: '" + out.string() + "' holds no checkpoint (checkpoint/ckpt_*.bin); a run writes "
-                    "one every run.checkpoint_interval_s of wall time and when SIGINT or SIGTERM stops it");
-  // the newest whole checkpoint (a damaged one is named and the one before it tried)
-  std::unique_ptr<CheckpointReader> r;
-  for (auto it = all.rbegin(); it != all.rend() && !r; ++it) {
-    try {
-      r = std::make_unique<CheckpointReader>(*it);
-    } catch (const CheckpointError& e) {
-      std::fprintf(stderr, "warning: %s; trying the one before\n", e.what());
-    }
-  }
-  if (!r) throw CaseError("cannot resume: no checkpoint in '" + (out / "checkpoint").string() + "' is whole");
-  toml::table doc;
-  try {
-    doc = toml::parse(r->text("run/case_text"));
-  } catch (const toml::parse_error& e) {
-    throw CheckpointError("checkpoint " + r->file().string() + ": its case does not parse: " +
-                          std::string(e.description()));
-  }
-  Scene scene = build_scene(doc, r->text("run/case_name"), out);
+RunSummary resume_run(const std::filesystem::path& out, const ResumePoint& point, const RunOptions& opt) {
+  Scene scene = build_scene(point.doc, point.name, out);
   RunOptions o = opt;
   o.out_dir = out;
   o.overwrite = false;
   if (!opt.quiet)
-    std::printf("resuming %s from %s (step %lld)\n", scene.name.c_str(), r->file().string().c_str(),
-                static_cast<long long>(r->integer("sim/steps")));
-  return run_loop(scene, o, r.get());
+    std::printf("resuming %s from %s (step %lld)\n", scene.name.c_str(), point.reader->file().string().c_str(),
+                static_cast<long long>(point.reader->integer("sim/steps")));
+  return run_loop(scene, o, point.reader.get());
+}
+
+}  // namespace SMPM_NS
+
+namespace smpm {
+
+// The entry points of the engine built for kern::kDim axes (engine/driver.hpp).
+template <>
+RunSummary Engine<kern::kDim>::run(const toml::table& doc, const std::string& name,
+                                   const std::filesystem::path& case_dir, const RunOptions& opt) {
+  Scene scene = build_scene(doc, name, case_dir);
+  return run_scene(scene, opt);
+}
+template <>
+std::string Engine<kern::kDim>::check(const toml::table& doc, const std::string& name,
+                                      const std::filesystem::path& case_dir) {
+  return describe_scene(build_scene(doc, name, case_dir));
+}
+template <>
+RunSummary Engine<kern::kDim>::resume(const std::filesystem::path& dir, const ResumePoint& point,
+                                      const RunOptions& opt) {
+  return resume_run(dir, point, opt);
 }
 
 }  // namespace smpm

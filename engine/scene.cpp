@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/scene.hpp"
 
 #include <unistd.h>
@@ -15,7 +16,7 @@
 #include "kernels/tensor.hpp"
 #include "kernels/transfer.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 namespace {
 
@@ -82,15 +83,33 @@ std::filesystem::path find_materials_file(CaseReader& top, const std::filesystem
                   "set the top-level key 'materials_file'");
 }
 
-// A per-axis case key: axis_key(1, "_range") = "y_range".
-std::string axis_key(int a, const char* suffix) { return std::string(kern::kAxisNames[a]) + suffix; }
+// A per-axis case key: the pattern with '?' replaced by the axis's name, axis_key(1, "?_range") =
+// "y_range", axis_key(2, "periodic_?") = "periodic_z".
+std::string axis_key(int a, const std::string& pattern) {
+  std::string k = pattern;
+  k.replace(k.find('?'), 1, kern::kAxisNames[a]);
+  return k;
+}
 
-// A case key holding one value per axis (e.g. velocity_m_s = [0.0, -800.0]) [SI], read as a pair
-// (the axes of D = 2); `def`: its default (none: the key is required).
+// A 2D case names no key of the third axis (its patterns as for axis_key): each is refused by
+// name, not left as an unknown key.
+void refuse_other_axes(CaseReader& r, std::initializer_list<const char*> patterns) {
+  for (int a = kDim; a < 3; ++a)
+    for (const char* p : patterns)
+      if (r.has(axis_key(a, p)))
+        throw CaseError("case key '" + (r.path().empty() ? "" : r.path() + ".") + axis_key(a, p) +
+                        "' belongs to axis " + kern::kAxisNames[a] + ", which a case with grid.dimension = " +
+                        std::to_string(kDim) + " does not have; set grid.dimension = 3 for a 3D case");
+}
+
+// A case key holding one value per axis (e.g. velocity_m_s = [0.0, -800.0] at D = 2, three
+// values at D = 3) [SI]; `def`: its default (none: the key is required).
 Vector read_vector(CaseReader& r, const std::string& key, const Quantity& q,
                    const std::optional<Vector>& def = std::nullopt) {
+  const std::vector<double> a = def ? r.numbers(key, q, kDim, std::vector<double>(def->c, def->c + kDim))
+                                    : r.numbers(key, q, kDim);
   Vector v;
-  std::tie(v[0], v[1]) = def ? r.pair(key, q, false, {(*def)[0], (*def)[1]}) : r.pair(key, q, false);
+  for (int d = 0; d < kDim; ++d) v[d] = a[d];
   return v;
 }
 
@@ -175,7 +194,7 @@ struct BodyShape {
 
 ShapeParams read_rectangle(CaseReader& r) {
   ShapeParams s;
-  for (int a = 0; a < kDim; ++a) std::tie(s.box.lo[a], s.box.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
+  for (int a = 0; a < kDim; ++a) std::tie(s.box.lo[a], s.box.hi[a]) = r.pair(axis_key(a, "?_range"), kLength, true);
   return s;
 }
 bool rectangle_inside(const ShapeParams& s, const Vector& p) { return in_half_open(s.box, p); }
@@ -185,7 +204,7 @@ bool rectangle_outline(const Box& b, const Vector& p) { return in_box(b, p); }
 // The keys of a rectangle's size: x_range, y_range, ...
 std::vector<std::string> range_keys() {
   std::vector<std::string> keys;
-  for (int a = 0; a < kDim; ++a) keys.push_back(axis_key(a, "_range"));
+  for (int a = 0; a < kDim; ++a) keys.push_back(axis_key(a, "?_range"));
   return keys;
 }
 
@@ -217,8 +236,9 @@ bool disk_outline(const Box& b, const Vector& p) {
 }
 
 const BodyShape kShapes[] = {
-    {"rectangle", read_rectangle, range_keys(), rectangle_inside, rectangle_bbox, rectangle_outline},
-    {"disk", read_disk, {"radius"}, disk_inside, disk_bbox, disk_outline},
+    {kDim == 2 ? "rectangle" : "box", read_rectangle, range_keys(), rectangle_inside, rectangle_bbox,
+     rectangle_outline},
+    {kDim == 2 ? "disk" : "sphere", read_disk, {"radius"}, disk_inside, disk_bbox, disk_outline},
 };
 
 std::vector<std::string> shape_names() {
@@ -267,9 +287,13 @@ double grid_bytes(double cells) { return cells * 14 * 8 * 2; }
 // run.max_memory
 void read_grid(CaseReader& top, Scene& s) {
   CaseReader r = top.table("grid");
+  const long dim = r.integer("dimension", 2, 3, 2);
+  if (dim != kDim)
+    throw CaseError("case key 'grid.dimension' = " + std::to_string(dim) + ": this engine is built for " +
+                    std::to_string(kDim) + " axes");
   const double h = r.quantity("cell_size", kLength, 1e-12, kInf);
   Box range;
-  for (int a = 0; a < kDim; ++a) std::tie(range.lo[a], range.hi[a]) = r.pair(axis_key(a, "_range"), kLength, true);
+  for (int a = 0; a < kDim; ++a) std::tie(range.lo[a], range.hi[a]) = r.pair(axis_key(a, "?_range"), kLength, true);
   s.geom.h = h;
   Vector f{};  // cells along each axis, as read
   double cells = 1.0;
@@ -280,7 +304,7 @@ void read_grid(CaseReader& top, Scene& s) {
     f[a] = (range.hi[a] - range.lo[a]) / h;
     cells *= f[a];
     too_many = too_many || !(f[a] <= 1e8);
-    keys += ", 'grid." + axis_key(a, "_range") + "'";
+    keys += ", 'grid." + axis_key(a, "?_range") + "'";
     counts += (a ? " x " : "") + format_number(f[a]);
   }
   if (!(grid_bytes(cells) <= s.run.max_memory) || too_many)
@@ -292,15 +316,21 @@ void read_grid(CaseReader& top, Scene& s) {
   for (int a = 0; a < kDim; ++a) {
     const int n = s.geom.n[a] = static_cast<int>(std::lround(f[a]));
     if (std::fabs(f[a] - n) > 1e-6 * f[a] || n < 1)
-      throw CaseError("case key 'grid." + axis_key(a, "_range") + "': " + kExtent[a] + " " +
+      throw CaseError("case key 'grid." + axis_key(a, "?_range") + "': " + kExtent[a] + " " +
                       format_number((range.hi[a] - range.lo[a]) * 1e6, 10) + " um is not a whole number of cells of "
                       "'grid.cell_size' " + format_number(h * 1e6, 10) + " um");
   }
-  s.geom.wrap[0] = r.boolean("periodic_x", false);
+  // periodic across the impact axis: x, and z in 3D
+  for (int a = 0; a < kDim; ++a) {
+    if (a == kImpactAxis) continue;
+    const std::string key = axis_key(a, "periodic_?");
+    s.geom.wrap[a] = r.boolean(key, false);
+    if (s.geom.wrap[a] && s.geom.n[a] < 4)
+      throw CaseError("case key 'grid." + key + "': a periodic grid needs at least 4 cells across, got " +
+                      std::to_string(s.geom.n[a]));
+  }
   s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
-  if (s.geom.wrap[0] && s.geom.n[0] < 4)
-    throw CaseError("case key 'grid.periodic_x': a periodic grid needs at least 4 cells across, got " +
-                    std::to_string(s.geom.n[0]));
+  refuse_other_axes(r, {"?_range", "periodic_?"});
   r.finish();
 }
 
@@ -332,15 +362,22 @@ void read_solver(CaseReader& top, Scene& s) {
 
 // [walls]: the kind of each side of the grid, by axis: its lower side, then its upper side.
 void read_walls(CaseReader& top, Scene& s) {
-  constexpr const char* kKeys[kDim][2] = {{"left", "right"}, {"bottom", "top"}};
+  constexpr const char* kKeys[3][2] = {{"left", "right"}, {"bottom", "top"}, {"back", "front"}};
   CaseReader r = top.table("walls");
   const std::vector<std::string> kinds{"none", "slip", "noslip"};
   for (int a = 0; a < kDim; ++a) {
     s.solver.walls.lo[a] = wall_kind(r.choice(kKeys[a][0], kinds, "none"));
     s.solver.walls.hi[a] = wall_kind(r.choice(kKeys[a][1], kinds, "none"));
+    if (s.geom.wrap[a] && (s.solver.walls.lo[a] != kern::Wall::None || s.solver.walls.hi[a] != kern::Wall::None))
+      throw CaseError(std::string("case keys 'walls.") + kKeys[a][0] + "'/'walls." + kKeys[a][1] + "': a grid with " +
+                      axis_key(a, "periodic_?") + " = true has no " + kKeys[a][0] + " or " + kKeys[a][1] +
+                      " wall; set them to 'none'");
   }
-  if (s.geom.wrap[0] && (s.solver.walls.lo[0] != kern::Wall::None || s.solver.walls.hi[0] != kern::Wall::None))
-    throw CaseError("case keys 'walls.left'/'walls.right': a grid with periodic_x = true has no left or right wall; set them to 'none'");
+  for (int a = kDim; a < 3; ++a)
+    for (const char* k : kKeys[a])
+      if (r.has(k))
+        throw CaseError(std::string("case key 'walls.") + k + "' is a wall across axis " + kern::kAxisNames[a] +
+                        ", which a case with grid.dimension = " + std::to_string(kDim) + " does not have");
   r.finish();
 }
 
@@ -551,7 +588,7 @@ Particles mirror_body(CaseReader& r, const Scene& s, std::size_t src, std::uint8
 // A body of [[bodies]] `shape` (default rectangle): its shape's keys and its points, at velocity v.
 Particles fill_shape(CaseReader& r, const Scene& s, BodyLattice& L, double rho0, const Vector& v, std::uint8_t b,
                      BodyInfo& info, Box& box) {
-  const BodyShape& shape = find_shape(r.choice("shape", shape_names(), "rectangle"));
+  const BodyShape& shape = find_shape(r.choice("shape", shape_names(), kShapes[0].name));
   const ShapeParams p = shape.read(r);
   box = shape.bbox(p);
   info.shape = shape.name;
@@ -598,10 +635,9 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
 void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Particles& P, BodyInfo& info) {
   CaseReader v = r.table("voids");
   const VoidSpec spec = read_voids(v, s, ppc, box);
-  const double period = s.geom.wrap[0] ? s.geom.length(0) : 0.0;
   Vector origin;
   for (int a = 0; a < kDim; ++a) origin[a] = s.geom.lo[a];
-  const auto res = cut_voids(P, s.geom.h / ppc, origin, box, spec, period);
+  const auto res = cut_voids(P, s.geom.h / ppc, origin, box, spec, periods(s.geom));
   if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
     throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
                     std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +
@@ -716,7 +752,7 @@ void check_contact(Scene& s, double void_reach_cells) {
     throw CaseError("case key 'contact.void_faces': 'separate' runs with solver.scheme = \"usl\" only");
   Vector impact{};  // the unit direction of the impact axis
   impact[kImpactAxis] = 1.0;
-  assign_void_sides(s.particles, voids, impact, void_reach_cells * s.geom.h, s.geom.wrap[0] ? s.geom.length(0) : 0.0,
+  assign_void_sides(s.particles, voids, impact, void_reach_cells * s.geom.h, periods(s.geom),
                     s.solver.void_face_fields);
 }
 
@@ -762,7 +798,7 @@ void read_regions(CaseReader& top, Scene& s) {
   for (auto& r : regions) {
     Region g;
     g.name = r.string("name");
-    std::tie(g.lo, g.hi) = r.pair(axis_key(kImpactAxis, "_range"), kLength, true);
+    std::tie(g.lo, g.hi) = r.pair(axis_key(kImpactAxis, "?_range"), kLength, true);
     const std::string body = r.string("body", s.bodies[s.target].name);
     bool found = false;
     for (std::size_t b = 0; b < s.bodies.size(); ++b)
@@ -928,4 +964,4 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
   return s;
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

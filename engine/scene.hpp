@@ -1,5 +1,6 @@
 // Scenes: a case file turned into a grid, solver settings, materials and filled bodies.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,7 +15,7 @@
 #include "engine/porous.hpp"
 #include "engine/simulation.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 // What a run does besides stepping: when to stop, what to write and how often.
 struct RunControl {
@@ -67,4 +68,4 @@ Scene build_scene(const toml::table& doc, const std::string& name, const std::fi
 Particles fill_rectangle(const kern::GridGeom& g, int ppc, const Box& box, double rho0, const Vector& v,
                          std::uint8_t body);
 
-}  // namespace smpm
+}  // namespace SMPM_NS

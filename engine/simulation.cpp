@@ -1,3 +1,4 @@
+#include "kernels/dimension.hpp"
 #include "engine/simulation.hpp"
 
 #include <omp.h>
@@ -18,7 +19,7 @@
 #include "kernels/transfer.hpp"
 #include "kernels/void_closure.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 Simulation::Simulation(const kern::GridGeom& geom, const SolverConfig& cfg, std::vector<Material> materials,
                        std::vector<int> body_material, Particles particles)
@@ -596,4 +597,4 @@ std::size_t Simulation::bytes() const {
          node_state_.capacity();
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

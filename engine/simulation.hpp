@@ -1,6 +1,7 @@
 // The time step. Simulation owns the particle arrays, the grid and the binning, and runs
 // one explicit MPM step as a short list of named phases (see step()).
 #pragma once
+#include "kernels/dimension.hpp"
 #include <array>
 #include <cstdint>
 #include <limits>
@@ -17,11 +18,14 @@
 #include "kernels/shape.hpp"
 
 namespace smpm {
+class CheckpointWriter;
+class CheckpointReader;
+}  // namespace smpm
+
+namespace SMPM_NS {
 namespace kern {
 struct G2PParams;
 }
-class CheckpointWriter;
-class CheckpointReader;
 namespace transfer {
 struct StepArgs;
 }
@@ -192,4 +196,4 @@ class Simulation {
   std::vector<Scalar> checkpoint_scalars();
 };
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,10 +1,11 @@
 // The solver's settings: shape function, transfer, scheme, time step, walls, contact, void
 // faces, heat conduction. A Scene carries one (engine/scene.hpp), Simulation runs with it.
 #pragma once
+#include "kernels/dimension.hpp"
 #include "kernels/grid_update.hpp"
 #include "kernels/shape.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 enum class Transfer { APIC, FLIP };
 // Void faces of a porous body: one velocity field (faces closer than about a cell share
@@ -61,4 +62,4 @@ struct SolverConfig {
   int fields() const { return contact ? 2 : void_faces == VoidFaces::Separate ? void_face_fields : 1; }
 };
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,10 +1,11 @@
+#include "kernels/dimension.hpp"
 #include "engine/thermo.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-namespace smpm {
+namespace SMPM_NS {
 
 namespace {
 constexpr int kTable = 8192;
@@ -159,4 +160,4 @@ HugoniotState porous_hugoniot(const Material& m, double up, double porosity) {
   return jump_state(m, rho00, root, pressure(root));
 }
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -8,11 +8,12 @@
 // "simple": T = T0 + e / cv, which counts cold compression energy as heat (about twice the shock
 // heating of dense Al at 1 km/s).
 #pragma once
+#include "kernels/dimension.hpp"
 #include <vector>
 
 #include "engine/material.hpp"
 
-namespace smpm {
+namespace SMPM_NS {
 
 class Thermo {
  public:
@@ -58,4 +59,4 @@ HugoniotState hugoniot(const Material& m, double up);
 // sits at rho0 and the front is the snowplow speed up rho00 / (rho0 - rho00).
 HugoniotState porous_hugoniot(const Material& m, double up, double porosity);
 
-}  // namespace smpm
+}  // namespace SMPM_NS

@@ -1,6 +1,7 @@
 // The transfers of a step with the quadratic shape function (engine/transfer_step.hpp).
+#include "kernels/dimension.hpp"
 #include "engine/transfer_step_impl.hpp"
 
-namespace smpm::transfer {
+namespace SMPM_NS::transfer {
 SMPM_TRANSFER_INSTANTIATE(kern::QuadraticBSpline)
-}  // namespace smpm::transfer
+}  // namespace SMPM_NS::transfer

@@ -4,6 +4,7 @@
 // variants (transfer, scheme, contact) are many vectorized loops per shape, and in one
 // file they were most of the engine's compile time.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <cstddef>
 #include <cstdint>
 
@@ -11,7 +12,7 @@
 #include "kernels/constitutive.hpp"
 #include "kernels/transfer.hpp"
 
-namespace smpm::transfer {
+namespace SMPM_NS::transfer {
 
 // What the transfers of a step read: the grid, the particles and their binning, the settings.
 struct StepArgs {
@@ -61,4 +62,4 @@ template <class Shape>
 kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern::G2PParams& q, double* scratch,
                                                   bool store_L, BlockUpdate update);
 
-}  // namespace smpm::transfer
+}  // namespace SMPM_NS::transfer

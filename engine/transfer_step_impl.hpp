@@ -1,11 +1,12 @@
 // Definitions of engine/transfer_step.hpp, included by engine/transfer_<shape>.cpp only, each of
 // which instantiates them for its shape.
 #pragma once
+#include "kernels/dimension.hpp"
 #include "engine/transfer_step.hpp"
 #include "kernels/grid_update.hpp"
 #include "kernels/transfer.hpp"
 
-namespace smpm::transfer {
+namespace SMPM_NS::transfer {
 
 template <class S>
 void scatter(const StepArgs& a) {
@@ -64,7 +65,7 @@ kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern:
   return usl(std::integral_constant<int, 0>{});
 }
 
-}  // namespace smpm::transfer
+}  // namespace SMPM_NS::transfer
 
 // One shape's instantiation, inside namespace smpm::transfer: SMPM_TRANSFER_INSTANTIATE(kern::Linear).
 #define SMPM_TRANSFER_INSTANTIATE(SHAPE)                                     \

@@ -11,6 +11,7 @@
 //   pressure    P <- EOS(rho, e)
 //   signal      c_L + |v| for the next CFL step
 #pragma once
+#include "dimension.hpp"
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -20,7 +21,7 @@
 
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // ---- EOS parts: P(rho, e) = cold(rho) + gamma_rho() * e ------------------------------------
 
@@ -613,4 +614,4 @@ double max_signal_speed(const ParticleView& P, std::size_t n, const Eos& eos, co
   return vmax;
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

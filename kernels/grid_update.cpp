@@ -1,9 +1,10 @@
+#include "dimension.hpp"
 #include "grid_update.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 namespace {
 
@@ -361,4 +362,4 @@ void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* ar
     if (g.periodic(d)) periodic_axis<false>(g, b, d, arrays, count);
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

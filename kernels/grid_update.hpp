@@ -1,10 +1,11 @@
 // Grid phases: clear, periodic fold, momentum update with forces and walls, ghost refresh.
 #pragma once
+#include "dimension.hpp"
 #include <cstddef>
 
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 enum class Wall : int { None = 0, Slip = 1, NoSlip = 2 };
 
@@ -95,4 +96,4 @@ void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all
 void fold_periodic(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
 void fill_periodic_ghosts(const GridGeom& g, const NodeBox& b, double* const* arrays, int count);
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

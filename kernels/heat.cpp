@@ -1,6 +1,7 @@
+#include "dimension.hpp"
 #include "heat.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 void heat_temperatures(const GridGeom& g, const HeatGrid& H) {
   const NodeBox all = g.all_nodes();
@@ -38,4 +39,4 @@ void heat_conduct(const GridGeom& g, const HeatGrid& H, double k, double c_min, 
   });
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -15,6 +15,7 @@
 // Nodes below c_min (free surfaces, void faces) are insulating, which keeps the explicit step
 // stable for dt <= c_min / (4 k).
 #pragma once
+#include "dimension.hpp"
 #include <cstddef>
 #include <cstdint>
 
@@ -22,7 +23,7 @@
 #include "grid_update.hpp"
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 struct HeatGrid {
   double* cap;   // C_i [J/(K m)]
@@ -99,4 +100,4 @@ void heat_gather(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, s
   }
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

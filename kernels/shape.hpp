@@ -3,11 +3,12 @@
 // (derivatives dN/dxg, i.e. gradients in grid units: divide by h for 1/m).
 // One templated P2G / G2P code path serves all of them (kernels/transfer.hpp).
 #pragma once
+#include "dimension.hpp"
 #include <cmath>
 
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // apic_gradient: for the linear hat, B D^-1 = sum_i v_i grad w_i^T exactly (D = f (1 - f) h^2
 // per axis vanishes on nodes), so APIC takes C from the gradient; the others use C = B D^-1
@@ -123,4 +124,4 @@ decltype(auto) with_shape(ShapeKind k, F&& f) {
   return f(CubicBSpline{});
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -1,10 +1,11 @@
+#include "dimension.hpp"
 #include "sort.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key) {
   std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(n);
@@ -100,4 +101,4 @@ void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, s
   }
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -2,6 +2,7 @@
 // The result is identical for any thread count (stability: within a cell, particles keep
 // their array order), which the bitwise-determinism guarantee of the whole step rests on.
 #pragma once
+#include "dimension.hpp"
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -9,7 +10,7 @@
 #include "tensor.hpp"
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // What a cell key needs of the grid, as doubles: integer arithmetic in doubles is exact here
 // (every value is an integer below 2^32) and the vector units do it without conversions; and
@@ -81,4 +82,4 @@ void gather_permute(const T* in, const std::uint32_t* order, std::size_t n, T* o
   for (std::size_t s = 0; s < n; ++s) out[s] = in[order[s]];
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

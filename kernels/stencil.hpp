@@ -8,10 +8,11 @@
 // Products run in axis order: at D = 2, w = wx[a] wy[b], gx = dwx[a] wy[b], gy = wx[a] dwy[b],
 // the order the results depend on bit for bit (scripts/bitwise_check.sh).
 #pragma once
+#include "dimension.hpp"
 #include "shape.hpp"
 #include "tensor.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 constexpr int ipow(int b, int e) { return e == 0 ? 1 : b * ipow(b, e - 1); }
 
@@ -93,4 +94,4 @@ struct Stencil {
   }
 };
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

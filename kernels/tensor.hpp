@@ -5,16 +5,17 @@
 //   D = 2: xx, yy, xy          D = 3: xx, yy, zz, xy, xz, yz
 // which is the order of the particles' stress arrays and of the checkpoint names.
 #pragma once
+#include "dimension.hpp"
 #include <cstddef>
 
 // Everything called per particle inside a vectorized particle loop is forced inline: GCC 12
 // kept such calls out of line otherwise (measured with perf), and a call keeps a loop scalar.
 #define SMPM_INLINE [[gnu::always_inline]] inline
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // The engine's dimension: every array of axis components has kDim entries.
-inline constexpr int kDim = 2;
+inline constexpr int kDim = SMPM_DIM;
 
 // Names of the axes, for case keys, checkpoints and messages.
 inline constexpr const char* kAxisNames[3] = {"x", "y", "z"};
@@ -125,4 +126,4 @@ SMPM_INLINE Spin<D> spin_part(const Mat<D>& L) {
   return w;
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -3,6 +3,7 @@
 // Race handling lives in the iteration (colored tiles, serial, or atomic adds for comparison),
 // never in the particle body.
 #pragma once
+#include "dimension.hpp"
 #include <cstddef>
 #include <algorithm>
 #include <cstdint>
@@ -12,7 +13,7 @@
 #include "stencil.hpp"
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 enum class P2GWhat { All, Momentum };  // All: mass, momentum, internal force. Momentum: MUSL remap.
 enum class G2PWhat { Full, Velocity, PositionGradient };  // Full: USL. MUSL: Velocity, then the rest.
@@ -766,4 +767,4 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
   return total;
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -1,6 +1,7 @@
 // Plain-pointer views of the particle and grid arrays the kernels work on.
 // The engine owns the storage (engine/particles.hpp, engine/grid.hpp); kernels never allocate.
 #pragma once
+#include "dimension.hpp"
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -11,7 +12,7 @@
 
 #include "tensor.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // A box of nodes, lo[d] <= i_d <= hi[d] along every axis d (inclusive; ghosts included, so
 // -pad <= lo[d] and hi[d] <= n_d + pad). The grid passes of a step work on the box its
@@ -250,4 +251,4 @@ struct Gradient {
   }
 };
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

@@ -31,6 +31,7 @@
 // of F-bar / "J-bar" methods against volumetric locking is applied only where a crack closes:
 // applied over every cell it keeps the points of a weld overlapping.)
 #pragma once
+#include "dimension.hpp"
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -38,7 +39,7 @@
 #include "stencil.hpp"
 #include "views.hpp"
 
-namespace smpm::kern {
+namespace SMPM_NS::kern {
 
 // ---- merge_closed_faces ----------------------------------------------------------------------
 
@@ -214,4 +215,4 @@ CrackResult close_cracks(const CrackArrays& A, const std::uint32_t* order, const
   return {vmax, changed};
 }
 
-}  // namespace smpm::kern
+}  // namespace SMPM_NS::kern

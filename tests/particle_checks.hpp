@@ -1,5 +1,6 @@
 // Test helper: compare particle arrays by the names the checkpoints use.
 #pragma once
+#include "kernels/dimension.hpp"
 #include <catch2/catch.hpp>
 
 #include <initializer_list>
@@ -9,7 +10,7 @@
 
 #include "engine/particles.hpp"
 
-namespace smpm::test {
+namespace SMPM_NS::test {
 
 // The double arrays of P by name ("x", "vy", "sxy", "Lyx", "V", "p", ...: Particles::each_array).
 inline std::map<std::string, const std::vector<double>*> arrays_by_name(const Particles& P) {
@@ -29,4 +30,4 @@ inline void require_same(const Particles& A, const Particles& B, std::initialize
   }
 }
 
-}  // namespace smpm::test
+}  // namespace SMPM_NS::test
