@@ -195,11 +195,10 @@ void write_snapshot_file(const fs::path& path, const std::vector<SnapshotField>&
       hsize_t dims[2] = {static_cast<hsize_t>(n), 0};
       int rank = 1;
       const double* data = fld.data.data();
-      if (fld.components == 2) {
+      if (fld.components > 1) {
         rank = 2;
-        if (fld.name == "position") {
-          dims[1] = 2;  // Geometry XY reads {n, 2} directly
-        } else {
+        dims[1] = static_cast<hsize_t>(fld.components);  // Geometry XY / XYZ, Vector, Tensor6 as given
+        if (fld.components == 2 && fld.name != "position") {
           // ParaView wants 3-component vectors: store (x, y, 0).
           dims[1] = 3;
           padded.assign(3 * n, 0.0);
@@ -257,9 +256,9 @@ void validate(const std::vector<SnapshotField>& fields, std::size_t n, double ti
         throw std::invalid_argument("SnapshotWriter: duplicate field '" + f.name + "'");
       }
     }
-    if (f.components != 1 && f.components != 2) {
+    if (f.components != 1 && f.components != 2 && f.components != 3 && f.components != 6) {
       throw std::invalid_argument("SnapshotWriter: field '" + f.name + "' has " +
-                                  std::to_string(f.components) + " components (1 or 2 allowed)");
+                                  std::to_string(f.components) + " components (1, 2, 3 or 6 allowed)");
     }
     if (f.data.size() != n * static_cast<std::size_t>(f.components)) {
       throw std::invalid_argument("SnapshotWriter: field '" + f.name + "' has " +
@@ -267,8 +266,8 @@ void validate(const std::vector<SnapshotField>& fields, std::size_t n, double ti
                                   std::to_string(n) + " x " + std::to_string(f.components));
     }
     if (f.name == "position") {
-      if (f.components != 2) {
-        throw std::invalid_argument("SnapshotWriter: field 'position' must have 2 components");
+      if (f.components != 2 && f.components != 3) {
+        throw std::invalid_argument("SnapshotWriter: field 'position' must have 2 or 3 components");
       }
       have_position = true;
     }
@@ -415,15 +414,19 @@ void SnapshotWriter::write_xdmf() const {
          "\" NodesPerElement=\"1\">\n";
     item(n, "Int", e.index64 ? 8 : 4, "/topology/polyvertex");
     s += "        </Topology>\n";
-    s += "        <Geometry GeometryType=\"XY\">\n";
-    item(n + " 2", "Float", 8, "/particles/position");
+    int axes = 2;
+    for (const FieldInfo& f : e.fields)
+      if (f.name == "position") axes = f.components;
+    s += std::string("        <Geometry GeometryType=\"") + (axes == 3 ? "XYZ" : "XY") + "\">\n";
+    item(n + " " + std::to_string(axes), "Float", 8, "/particles/position");
     s += "        </Geometry>\n";
     for (const FieldInfo& f : e.fields) {
       if (f.name == "position") continue;
-      const bool vec = f.components == 2;
-      s += "        <Attribute Name=\"" + f.name + "\" AttributeType=\"" + (vec ? "Vector" : "Scalar") +
-           "\" Center=\"Node\">\n";
-      item(vec ? n + " 3" : n, "Float", 8, "/particles/" + f.name);
+      // a 2-component vector is stored padded to 3 (x, y, 0)
+      const char* type = f.components == 1 ? "Scalar" : f.components == 6 ? "Tensor6" : "Vector";
+      const int stored = f.components == 2 ? 3 : f.components;
+      s += "        <Attribute Name=\"" + f.name + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n";
+      item(stored == 1 ? n : n + " " + std::to_string(stored), "Float", 8, "/particles/" + f.name);
       s += "        </Attribute>\n";
     }
     s += "      </Grid>\n";

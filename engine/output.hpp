@@ -4,10 +4,14 @@
 // Layout of fields_dir/snap_<step, 8 digits>.h5 (all values double, SI units):
 //   /particles/<name>        one dataset per field:
 //                              scalar            shape {n}
-//                              "position"        shape {n, 2}  (x, y)
-//                              any other vector  shape {n, 3}  (x, y, 0): the z column is written
-//                                                as zeros so that ParaView sees a 3-component
-//                                                Vector (both its XDMF readers want 3 components)
+//                              "position"        shape {n, 2} (x, y) or {n, 3} (x, y, z)
+//                              a 3-component vector shape {n, 3}
+//                              a 2-component vector shape {n, 3} (x, y, 0): the z column is
+//                                                written as zeros so that ParaView sees a
+//                                                3-component Vector (both its XDMF readers
+//                                                want 3 components)
+//                              a symmetric tensor shape {n, 6} in XDMF's Tensor6 order: xx, xy,
+//                                                xz, yy, yz, zz
 //                            string attribute "units" on each dataset
 //   /particles               attributes "time" (double, s) and "step" (int64)
 //   /topology/polyvertex     vertex indices 0..n-1 (int32, or int64 when n > 2^31 - 1): the
@@ -15,15 +19,15 @@
 //                            Topology without a DataItem, and then nothing is drawn.
 //
 // fields_dir/particles.xdmf lists every snapshot written by this writer as a temporal collection
-// (one Uniform grid per snapshot with its own n, Polyvertex topology, Geometry XY from "position",
-// every other field a Node-centred Scalar or Vector attribute). It is rewritten after every
+// (one Uniform grid per snapshot with its own n, Polyvertex topology, Geometry XY or XYZ from
+// "position", every other field a Node-centred Scalar, Vector or Tensor6 attribute). It is rewritten after every
 // snapshot by writing particles.xdmf.tmp and renaming it; snapshot files are written the same way
 // (snap_*.h5.tmp, then rename), so a crash never leaves a truncated file under the final name.
 //
 // Errors: HDF5's automatic error printing is switched off while write() runs; any HDF5 or file
 // system failure throws std::runtime_error naming the file, the failing call and HDF5's innermost
-// error message. Invalid arguments (no 2-component "position", data size != n * components,
-// components not 1 or 2, empty / duplicate names or names outside [A-Za-z0-9_.-]) throw
+// error message. Invalid arguments (no 2- or 3-component "position", data size != n * components,
+// components not 1, 2, 3 or 6, empty / duplicate names or names outside [A-Za-z0-9_.-]) throw
 // std::invalid_argument before anything is written.
 #pragma once
 #include <cstddef>
@@ -36,7 +40,7 @@ namespace smpm {
 struct SnapshotField {
   std::string name;          // dataset name, e.g. "position", "velocity", "pressure"
   std::string units;         // e.g. "m", "m/s", "Pa" (string attribute "units")
-  int components = 1;        // 1 (scalar) or 2 (vector: components interleaved in `data`)
+  int components = 1;        // 1 (scalar), 2 or 3 (vector), 6 (symmetric tensor); interleaved in `data`
   std::vector<double> data;  // n * components values
 };
 
@@ -47,7 +51,7 @@ class SnapshotWriter {
   explicit SnapshotWriter(std::filesystem::path fields_dir);
 
   // Writes fields_dir/snap_<step>.h5 and rewrites fields_dir/particles.xdmf (see above). `fields`
-  // must contain "position" with 2 components. Writing a step again replaces that snapshot.
+  // must contain "position" with 2 or 3 components. Writing a step again replaces that snapshot.
   void write(const std::vector<SnapshotField>& fields, std::size_t n, double time_s, long step);
 
   // The index (what particles.xdmf lists) as text, for a checkpoint; adopt() takes such a text

@@ -122,13 +122,14 @@ constexpr Column<FrontRow> kFrontColumns[] = {
     {"front_y_um", "um", [](const FrontRow& r) { return r.at * 1e6; }},
 };
 
-// wall.csv: the bottom wall's normal stress at a time, its force per unit depth over its width
+// wall.csv: the bottom wall's normal stress at a time, its force over its area (at D = 2 the
+// force per unit depth over its width)
 struct WallRow {
-  double t, force, width;  // [s], [N/m], [m]
+  double t, force, area;  // [s], [N] ([N/m] at D = 2), [m^2] ([m] at D = 2)
 };
 constexpr Column<WallRow> kWallColumns[] = {
     {"time_ns", "ns", [](const WallRow& r) { return r.t * 1e9; }},
-    {"wall_stress_GPa", "GPa", [](const WallRow& r) { return r.force / r.width * 1e-9; }},
+    {"wall_stress_GPa", "GPa", [](const WallRow& r) { return r.force / r.area * 1e-9; }},
 };
 
 // voids.csv: the void area open in the target ("target") or one of its regions at a time
@@ -241,8 +242,19 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
     if (r == c) scal(name, "Pa", [&, k](std::size_t i) { return P.s[k][i] - P.p[i]; });
     else scal(name, "Pa", [&, k](std::size_t i) { return P.s[k][i]; });
   }
-  if constexpr (kern::kDim == 2)
+  if constexpr (kern::kDim == 2) {
     scal("stress_zz", "Pa", [&](std::size_t i) { return -(P.s[0][i] + P.s[1][i]) - P.p[i]; });
+  } else {
+    // the same stress as one tensor for ParaView (Tensor6: xx, xy, xz, yy, yz, zz)
+    SnapshotField t{"stress", "Pa", 6, std::vector<double>(6 * n)};
+    constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
+    for (int j = 0; j < 6; ++j) {
+      const int k = kern::sym_index(kern::kDim, kRow[j], kCol[j]);
+      const bool diag = kRow[j] == kCol[j];
+      for (std::size_t i = 0; i < n; ++i) t.data[6 * i + j] = P.s[k][i] - (diag ? P.p[i] : 0.0);
+    }
+    f.push_back(std::move(t));
+  }
   if (!P.e.empty()) {
     scal("energy", "J/kg", [&](std::size_t i) { return P.e[i]; });
     scal("temperature", "K", [&](std::size_t i) {
@@ -263,8 +275,10 @@ std::vector<SnapshotField> snapshot_fields(const Simulation& sim) {
 // Hugoniot states its stop from that speed reaches.
 toml::table body_json(const Scene& scene, std::size_t k) {
   const auto& b = scene.bodies[k];
+  toml::array velocity;
+  for (int a = 0; a < kDim; ++a) velocity.push_back(b.velocity[a]);
   toml::table bt{{"name", b.name}, {"material", b.material}, {"particles", static_cast<int64_t>(b.particles)},
-                 {"area_m2", b.area}, {"velocity_m_s", toml::array{b.velocity[0], b.velocity[1]}}, {"porosity", b.porosity},
+                 {kPerDepth ? "area_m2" : "volume_m3", b.area}, {"velocity_m_s", velocity}, {"porosity", b.porosity},
                  {"voids", static_cast<int64_t>(b.voids)}};
   const Material& m = scene.materials[scene.body_material[k]];
   const double up = magnitude(b.velocity);
@@ -379,13 +393,20 @@ std::string describe_scene(const Scene& sc) {
   std::ostringstream o;
   const auto& g = sc.geom;
   o << "case            " << sc.name << "\n";
-  o << "grid            " << g.n[0] << " x " << g.n[1] << " cells of " << g.h * 1e6 << " um, x in [" << g.lo[0] * 1e6
-    << ", " << (g.lo[0] + g.length(0)) * 1e6 << "] um, y in [" << g.lo[1] * 1e6 << ", " << (g.lo[1] + g.length(1)) * 1e6
-    << "] um" << (g.wrap[0] ? ", periodic in x" : "") << "\n";
+  o << "grid            ";
+  for (int a = 0; a < kDim; ++a) o << (a ? " x " : "") << g.n[a];
+  o << " cells of " << g.h * 1e6 << " um";
+  for (int a = 0; a < kDim; ++a)
+    o << ", " << kern::kAxisNames[a] << " in [" << g.lo[a] * 1e6 << ", " << (g.lo[a] + g.length(a)) * 1e6 << "]"
+      << (a == kDim - 1 ? " um" : "");
+  for (int a = 0; a < kDim; ++a)
+    if (g.wrap[a]) o << ", periodic in " << kern::kAxisNames[a];
+  o << "\n";
   o << "particles       " << sc.particles.size() << "\n";
   for (const auto& b : sc.bodies)
     o << "  body " << std::left << std::setw(10) << b.name << std::right << " material " << b.material << ", "
-      << b.particles << " particles, area " << b.area * 1e12 << " um^2"
+      << b.particles << " particles, " << (kPerDepth ? "area " : "volume ") << b.area * (kPerDepth ? 1e12 : 1e18)
+      << (kPerDepth ? " um^2" : " um^3")
       << (b.voids ? ", porosity " + std::to_string(b.porosity) + " (" + std::to_string(b.voids) + " voids)" : "")
       << "\n";
   describe_points(o, sc);
@@ -548,7 +569,7 @@ RunOutputs::RunOutputs(const Scene& scene, const Simulation& sim, const std::fil
   if (resume) points_.restore(*resume);
   if (points_.has_gauges()) gauges_.open(out / "gauges.csv", PointRecorder::gauge_header(), 10, resume);
   if (points_.has_surfaces()) surface_.open(out / "freesurface.csv", PointRecorder::surface_header(), 10, resume);
-  if (scene.solver.walls.lo[1] != kern::Wall::None)
+  if (scene.solver.walls.lo[kImpactAxis] != kern::Wall::None)
     wall_.open(out / "wall.csv", csv_header(kWallColumns), 10, resume);
 }
 
@@ -613,7 +634,10 @@ void RunOutputs::write_series_h5() {
 void RunOutputs::write_wall() {
   if (!wall_.is_open()) return;
   Timed t(s_.diagnostics_seconds);
-  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().lo[kImpactAxis], scene_.geom.length(0)});
+  double area = 1.0;  // the wall's: the grid's extent across the impact axis
+  for (int a = 0; a < kDim; ++a)
+    if (a != kImpactAxis) area *= scene_.geom.length(a);
+  wall_.row(kWallColumns, WallRow{sim_.time(), sim_.wall_forces().lo[kImpactAxis], area});
   wall_.flush();
 }
 
@@ -756,10 +780,12 @@ void RunLoop::print_start() const {
   const double dt0 = sim_.stable_dt();
   // a resumed run: the steps still to go, at the dt of the step it resumes at
   const double left = scene_.run.end_time - sim_.time();
-  std::printf("shockmpm %s: %zu particles, grid %d x %d cells of %.4g um, %.6g ns in about %.0f steps "
+  std::string cells;
+  for (int a = 0; a < kDim; ++a) cells += (a ? " x " : "") + std::to_string(scene_.geom.n[a]);
+  std::printf("shockmpm %s: %zu particles, grid %s cells of %.4g um, %.6g ns in about %.0f steps "
               "(dt %.3g ns at t = %.6g ns), %d threads, results in %s\n",
-              scene_.name.c_str(), sim_.particles().size(), scene_.geom.n[0], scene_.geom.n[1], scene_.geom.h * 1e6,
-              left * 1e9, std::ceil(left / dt0), dt0 * 1e9, sim_.time() * 1e9, threads_, out_.string().c_str());
+              scene_.name.c_str(), sim_.particles().size(), cells.c_str(), scene_.geom.h * 1e6, left * 1e9,
+              std::ceil(left / dt0), dt0 * 1e9, sim_.time() * 1e9, threads_, out_.string().c_str());
   std::fflush(stdout);
 }
 

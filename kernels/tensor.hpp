@@ -56,6 +56,14 @@ struct Vec {
 template <int D>
 using Idx = Vec<D, int>;
 
+// The vector with every component v.
+template <int D, class T>
+constexpr Vec<D, T> uniform(T v) {
+  Vec<D, T> r{};
+  for (int d = 0; d < D; ++d) r.c[d] = v;
+  return r;
+}
+
 // A general D x D matrix, row-major: (r, c) = c[r][col].
 template <int D>
 struct Mat {

@@ -399,7 +399,7 @@ struct G2PParams {
   // Rigid walls are impenetrable: a point moved past one is put back on it. (With B-splines a
   // point in the first cell also feels nodes inside the material and can overshoot the wall
   // by a fraction of dt |v|.) Per axis; -inf / +inf where there is no wall.
-  double lo[kDim] = {-1e300, -1e300}, hi[kDim] = {1e300, 1e300};
+  Vec<kDim> lo = uniform<kDim>(-1e300), hi = uniform<kDim>(1e300);
 };
 
 // Gather for one particle. Velocity: APIC (PIC velocity plus the affine matrix C = B D^-1) or

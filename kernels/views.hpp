@@ -58,7 +58,7 @@ struct NodeBox {
 struct GridGeom {
   double h = 1.0;
   double lo[kDim] = {};    // origin [m]
-  int n[kDim] = {1, 1};    // cells per axis
+  Idx<kDim> n = uniform<kDim>(1);  // cells per axis
   bool wrap[kDim] = {};    // periodic axes
   int pad = 2;             // ghost nodes per side (>= 2 serves every shape function here)
   int tile = 16;           // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
