@@ -169,7 +169,8 @@ struct Raster {
   }
 };
 
-// Marks the pixels whose centre lies in a body point's disk, radius * sqrt(V_p) capped at rmax.
+// Marks the pixels whose centre lies in a body point's disk (ball), radius * point_size(V_p)
+// capped at rmax.
 void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
   // the raster's geometry in locals: a store into the image (bytes) could alias the members
   const Vector lo = R.lo, step = R.step;
@@ -179,7 +180,7 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
   std::uint8_t* img = R.img.data();
   for (std::size_t p = 0; p < P.size(); ++p) {
     if (P.body[p] != body) continue;
-    const double rad = std::min(radius * std::sqrt(std::max(P.V[p], 0.0)), rmax), r2 = rad * rad;
+    const double rad = std::min(radius * point_size(P.V[p]), rmax), r2 = rad * rad;
     Vector c;
     Index first, last;  // the pixels of the disk's bounding box (those of a wrapping axis unwrapped)
     for (int d = 0; d < kDim; ++d) {
@@ -266,16 +267,16 @@ void add_void_area(const Raster& R, const std::vector<Window>& windows, std::vec
 }
 
 // The image over box b, the body's bounding box padded by `pad` on every side (a wrapping axis:
-// the period from `start` instead); nullopt beyond 4e8 pixels. Lateral axes hold a whole number of
+// the period from `start` instead); nullopt beyond kMaxPixels. Lateral axes hold a whole number of
 // pixels of about `pixel` (a period tiles exactly), the impact axis pixels of side `pixel`.
-std::optional<Raster> make_raster(Box b, double pixel, double pad, double period, double start) {
+std::optional<Raster> make_raster(Box b, double pixel, double pad, const Vector& period, const Vector& start) {
   Raster R;
   double nd[kDim], total = 1.0;  // pixels per axis, and in all
   for (int d = 0; d < kDim; ++d) {
-    R.wrap[d] = d == 0 && period > 0.0;
+    R.wrap[d] = period[d] > 0.0;
     if (R.wrap[d]) {
-      b.lo[d] = start;
-      b.hi[d] = start + period;
+      b.lo[d] = start[d];
+      b.hi[d] = start[d] + period[d];
     } else {
       b.lo[d] -= pad;
       b.hi[d] += pad;
@@ -286,7 +287,7 @@ std::optional<Raster> make_raster(Box b, double pixel, double pad, double period
                              : std::max(1.0, std::round((b.hi[d] - b.lo[d]) / pixel));
     total *= nd[d];
   }
-  if (!(total <= 4e8)) return std::nullopt;
+  if (!(total <= kMaxPixels)) return std::nullopt;
   long pixels = 1;
   for (int d = 0; d < kDim; ++d) {
     R.lo[d] = b.lo[d];
@@ -301,7 +302,7 @@ std::optional<Raster> make_raster(Box b, double pixel, double pad, double period
 }  // namespace
 
 std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
-                              double pixel, double radius, double period, double start) {
+                              double pixel, double radius, const Vector& period, const Vector& start) {
   std::vector<double> area(windows.size(), 0.0);
   Box b;  // the body's bounding box [m]
   double smax = 0.0;
@@ -315,11 +316,11 @@ std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::
       b.lo[d] = std::min(b.lo[d], P.x[d][p]);
       b.hi[d] = std::max(b.hi[d], P.x[d][p]);
     }
-    smax = std::max(smax, std::sqrt(P.V[p]));
+    smax = std::max(smax, point_size(P.V[p]));
   }
   if (b.hi[0] < b.lo[0] || !(pixel > 0.0)) return area;
   // a point blown up to a huge volume (a failing run's debris) would make the image huge: disks
-  // are capped at 16 pixels of radius, and an image over 4e8 pixels is not drawn (NaN)
+  // are capped at 16 pixels of radius, and an image over kMaxPixels is not drawn (NaN)
   const double rmax = 16.0 * pixel;
   smax = std::min(smax, rmax / std::max(radius, 1e-3));
   std::optional<Raster> R = make_raster(b, pixel, 2.0 * pixel + smax, period, start);

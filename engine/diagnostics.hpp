@@ -1,6 +1,7 @@
 // Diagnostics computed from the particle state during a run.
 #pragma once
 #include "kernels/dimension.hpp"
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -25,19 +26,30 @@ namespace SMPM_NS {
 double front_position(const Particles& P, std::uint8_t body, double u0, double lo, double h, int rows,
                       bool from_top);
 
-// Void area left open in one body [m^2] inside each window [lo, hi] (current configuration):
-// each of the body's points covers a disk of radius `radius` sqrt(V_p) centred on it, rasterized
-// on pixels of side about `pixel` over the body's bounding box; uncovered pixels connected to the
-// box's border (outside the body: above its free surface, beyond its ends) are not voids; the
-// others are, and those whose centre lies in the window count. period > 0: axis 0 (x) wraps with
-// that period (periodic sides; the box then spans the period from `start`). A radius
-// of 0.75 covers a square lattice, sheared or stretched by a third, without gaps: openings
-// narrower than about half the point spacing do not count (voids.csv, tests/test_porous.cpp).
-// Disks are capped at 16 pixels of radius; an image over 4e8 pixels gives NaN areas.
-// One rasterization serves every window: the result holds one area per window.
+// Void area (D = 2) or volume (D = 3) left open in one body [m^2 per unit thickness, m^3] inside
+// each window [lo, hi] (current configuration): each of the body's points covers a disk (ball)
+// of radius `radius` point_size(V_p) centred on it, rasterized on pixels (voxels) of side about
+// `pixel` over the body's bounding box; uncovered pixels connected to the box's border (outside
+// the body: above its free surface, beyond its ends) are not voids; the others are, and those
+// whose centre lies in the window count. Along an axis with period[d] > 0 the image wraps with
+// that period (periodic sides; the box then spans the period from start[d]). kCoverRadius covers
+// a square (cubic) lattice, sheared or stretched by a third, without gaps: openings narrower
+// than about half the point spacing do not count (voids.csv, tests/test_porous.cpp). Disks are
+// capped at 16 pixels of radius; an image over kMaxPixels (one byte each: at most 400 MB) gives
+// NaN areas. One rasterization serves every window: the result holds one area per window.
 using Window = Box;
+inline constexpr double kMaxPixels = 4e8;
+// 0.75 in 2D, where a square's corner is 0.71 spacings from its point; in 3D a cube's corner
+// is 0.87 from it, and 0.92 keeps the same margin
+inline constexpr double kCoverRadius = kern::kDim == 2 ? 0.75 : 0.92;
 std::vector<double> open_area(const Particles& P, std::uint8_t body, const std::vector<Window>& windows,
-                              double pixel, double radius, double period = 0.0, double start = 0.0);
+                              double pixel, double radius, const Vector& period = {}, const Vector& start = {});
+
+// The side of a point's cell of volume V, V^(1/D) [m] (0 for V <= 0).
+inline double point_size(double V) {
+  if constexpr (kern::kDim == 2) return std::sqrt(std::max(V, 0.0));
+  else return std::cbrt(std::max(V, 0.0));
+}
 
 // Temperature of particle p [K] (T0 where the particle carries no energy); the stored share
 // (1 - heat_fraction) of its plastic work does not count as heat.

@@ -2,6 +2,7 @@
 #include "engine/gauges.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string_view>
@@ -131,20 +132,48 @@ struct GaugeRow {
   std::string_view name;
   const GaugeSample& g;
 };
-constexpr Column<GaugeRow> kGaugeColumns[] = {
-    {"time_ns", "ns", [](const GaugeRow& r) { return r.t * 1e9; }},
-    {"gauge", "name", nullptr, [](const GaugeRow& r) { return r.name; }},
-    {"x_um", "um", [](const GaugeRow& r) { return r.g.pos[0] * 1e6; }},
-    {"y_um", "um", [](const GaugeRow& r) { return r.g.pos[1] * 1e6; }},
-    {"vx_m_s", "m/s", [](const GaugeRow& r) { return r.g.vel[0]; }},
-    {"vy_m_s", "m/s", [](const GaugeRow& r) { return r.g.vel[1]; }},
-    {"sigma_xx_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[0] * 1e-9; }},
-    {"sigma_yy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[1] * 1e-9; }},
-    {"sigma_xy_GPa", "GPa", [](const GaugeRow& r) { return r.g.sigma[2] * 1e-9; }},
-    {"P_GPa", "GPa", [](const GaugeRow& r) { return r.g.P * 1e-9; }},
-    {"rho_g_cc", "g/cc", [](const GaugeRow& r) { return r.g.rho * 1e-3; }},
-    {"T_K", "K", [](const GaugeRow& r) { return r.g.T; }},
-};
+// a component of a row's position [um], velocity [m/s] and stress [GPa] (components of the
+// axes the engine has; the others are never listed)
+template <int A>
+double pos_um(const GaugeRow& r) {
+  if constexpr (A < kern::kDim) return r.g.pos[A] * 1e6;
+  else return 0.0;
+}
+template <int A>
+double vel_m_s(const GaugeRow& r) {
+  if constexpr (A < kern::kDim) return r.g.vel[A];
+  else return 0.0;
+}
+template <int K>
+double sigma_GPa(const GaugeRow& r) {
+  if constexpr (K < kern::sym_size(kern::kDim)) return r.g.sigma[K] * 1e-9;
+  else return 0.0;
+}
+// time, gauge, position and velocity by axis, stress by symmetric component (kernels/tensor.hpp's
+// order: xx, yy, xy at D = 2; xx, yy, zz, xy, xz, yz at D = 3), P, rho, T
+constexpr auto kGaugeColumns = [] {
+  constexpr int D = kern::kDim, K = kern::sym_size(D);
+  constexpr const char* kPos[] = {"x_um", "y_um", "z_um"};
+  constexpr const char* kVel[] = {"vx_m_s", "vy_m_s", "vz_m_s"};
+  constexpr const char* kSigma[2][6] = {
+      {"sigma_xx_GPa", "sigma_yy_GPa", "sigma_xy_GPa"},
+      {"sigma_xx_GPa", "sigma_yy_GPa", "sigma_zz_GPa", "sigma_xy_GPa", "sigma_xz_GPa", "sigma_yz_GPa"}};
+  constexpr double (*kPosF[])(const GaugeRow&) = {pos_um<0>, pos_um<1>, pos_um<2>};
+  constexpr double (*kVelF[])(const GaugeRow&) = {vel_m_s<0>, vel_m_s<1>, vel_m_s<2>};
+  constexpr double (*kSigmaF[])(const GaugeRow&) = {sigma_GPa<0>, sigma_GPa<1>, sigma_GPa<2>,
+                                                     sigma_GPa<3>, sigma_GPa<4>, sigma_GPa<5>};
+  std::array<Column<GaugeRow>, 5 + 2 * D + K> c{};
+  int i = 0;
+  c[i++] = {"time_ns", "ns", [](const GaugeRow& r) { return r.t * 1e9; }};
+  c[i++] = {"gauge", "name", nullptr, [](const GaugeRow& r) { return r.name; }};
+  for (int a = 0; a < D; ++a) c[i++] = {kPos[a], "um", kPosF[a]};
+  for (int a = 0; a < D; ++a) c[i++] = {kVel[a], "m/s", kVelF[a]};
+  for (int k = 0; k < K; ++k) c[i++] = {kSigma[D - 2][k], "GPa", kSigmaF[k]};
+  c[i++] = {"P_GPa", "GPa", [](const GaugeRow& r) { return r.g.P * 1e-9; }};
+  c[i++] = {"rho_g_cc", "g/cc", [](const GaugeRow& r) { return r.g.rho * 1e-3; }};
+  c[i++] = {"T_K", "K", [](const GaugeRow& r) { return r.g.T; }};
+  return c;
+}();
 
 // freesurface.csv: one row per free surface at a time
 struct SurfaceRow {

@@ -132,16 +132,18 @@ constexpr Column<WallRow> kWallColumns[] = {
     {"wall_stress_GPa", "GPa", [](const WallRow& r) { return r.force / r.area * 1e-9; }},
 };
 
-// voids.csv: the void area open in the target ("target") or one of its regions at a time
+// voids.csv: the void area (D = 2) or volume (D = 3) open in the target ("target") or one of its
+// regions at a time
 struct VoidsRow {
   double t;  // [s]
   std::string_view region;
-  double area, fraction;  // [m^2], of the region's band (NaN for the whole target)
+  double area, fraction;  // [m^2] or [m^3], of the region's band (NaN for the whole target)
 };
 constexpr Column<VoidsRow> kVoidsColumns[] = {
     {"time_ns", "ns", [](const VoidsRow& r) { return r.t * 1e9; }},
     {"region", "name", nullptr, [](const VoidsRow& r) { return r.region; }},
-    {"open_area_um2", "um^2", [](const VoidsRow& r) { return r.area * 1e12; }},
+    {kPerDepth ? "open_area_um2" : "open_volume_um3", kPerDepth ? "um^2" : "um^3",
+     [](const VoidsRow& r) { return r.area * (kPerDepth ? 1e12 : 1e18); }},
     {"open_fraction", "1", [](const VoidsRow& r) { return r.fraction; }},
 };
 
@@ -648,8 +650,7 @@ void RunOutputs::write_voids() {
   Timed t(s_.diagnostics_seconds);
   const auto& g = scene_.geom;
   const auto& body = scene_.bodies[target_];
-  const double pixel = std::sqrt(body.area / double(body.particles)) / 3;  // [m]
-  const double period = g.wrap[0] ? g.length(0) : 0.0;
+  const double pixel = point_size(body.area / double(body.particles)) / 3;  // [m]
   const auto b = static_cast<std::uint8_t>(target_);
   // the windows: the grid's lateral extent, along the impact axis all of it or a region's band
   Window all;
@@ -666,7 +667,9 @@ void RunOutputs::write_voids() {
     w.hi[kImpactAxis] = r.hi;
     win.push_back(w);
   }
-  const auto a = open_area(sim_.particles(), b, win, pixel, 0.75, period, g.lo[0]);
+  Vector origin;
+  for (int d = 0; d < kDim; ++d) origin[d] = g.lo[d];
+  const auto a = open_area(sim_.particles(), b, win, pixel, kCoverRadius, periods(g), origin);
   voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
   for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
     const auto& r = scene_.regions[k];

@@ -329,7 +329,7 @@ void read_grid(CaseReader& top, Scene& s) {
       throw CaseError("case key 'grid." + key + "': a periodic grid needs at least 4 cells across, got " +
                       std::to_string(s.geom.n[a]));
   }
-  s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, 16));
+  s.geom.tile = static_cast<int>(r.integer("tile_cells", 4, kern::kMaxTile, kern::kMaxTile));
   refuse_other_axes(r, {"?_range", "periodic_?"});
   r.finish();
 }

@@ -61,7 +61,7 @@ struct GridGeom {
   Idx<kDim> n = uniform<kDim>(1);  // cells per axis
   bool wrap[kDim] = {};    // periodic axes
   int pad = 2;             // ghost nodes per side (>= 2 serves every shape function here)
-  int tile = 16;           // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
+  int tile = kDim == 2 ? 16 : 8;  // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
 
   // per axis: cells, origin [m], periodicity, storage length (nodes with ghosts), storage stride
   int cells(int d) const { return n[d]; }
