@@ -704,6 +704,7 @@ void read_body(std::vector<CaseReader>& bodies, std::size_t b, Scene& s, const M
                          : fill_shape(r, s, L, s.materials[material].rho0, v, id, info, box);
   if (src < 0 && r.has("voids")) cut_body_voids(r, s, ppc, box, P, info);
   info.record_free_surface = r.boolean("record_free_surface", false);
+  refuse_other_axes(r, {"?_range"});
   r.finish();
   info.box = box;
   check_in_grid(r, s, info, box, P);

@@ -1,0 +1,167 @@
+// The engine built for three axes (SMPM_DIM = 3) against exact answers: an elastic bar's
+// vibration period, the dense aluminium Hugoniot in a column periodic across (against the exact
+// Rankine-Hugoniot state and against the same column in 2D), energy closed to round-off, a
+// spherical void that collapses and closes, bitwise-identical particle arrays with 1, 2 and 3
+// threads, and a restart from a checkpoint bitwise like the uninterrupted run.
+#include <catch2/catch.hpp>
+#include <omp.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "engine/case_reader.hpp"
+#include "engine/checkpoint.hpp"
+#include "engine/diagnostics.hpp"
+#include "engine/scene.hpp"
+#include "engine/simulation.hpp"
+#include "tests/column_impact.hpp"
+#include "tests/particle_checks.hpp"
+
+using namespace smpm;
+static_assert(kern::kDim == 3, "tests/test_3d.cpp is compiled for the 3D engine (SMPM_DIM=3)");
+
+namespace {
+
+Scene verify_scene(const std::string& file, const std::vector<std::string>& overrides = {}) {
+  auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/" + file);
+  apply_overrides(doc, overrides);
+  return build_scene(doc, file, std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+}
+
+// Every array of the particles, by the checkpoint's names.
+const std::initializer_list<const char*> kAllArrays = {"x",   "y",   "z",   "vx",  "vy",  "vz",  "m",   "V",
+                                                       "sxx", "syy", "szz", "sxy", "sxz", "syz", "p",   "Lxx",
+                                                       "Lxy", "Lxz", "Lyx", "Lyy", "Lyz", "Lzx", "Lzy", "Lzz"};
+
+}  // namespace
+
+// tests/test_elastic.cpp's fixed-free bar (Sulsky/Bardenhagen: L = 25, E = 100, rho = 1, nu = 0,
+// v0 = 0.1 sin(pi x / 2L); period 4 L / c = 10), one cell across in y and z between slip walls.
+TEST_CASE("3D: axial vibration of an elastic bar, period and amplitude", "[verification][3d]") {
+  const double L = 25.0, h = 0.5;
+  kern::GridGeom g;
+  g.h = h;
+  g.n[0] = static_cast<int>(std::lround(30.0 / h));
+  g.n[1] = g.n[2] = 1;
+  SolverConfig cfg;
+  cfg.cfl = 0.2;
+  cfg.walls.lo[0] = kern::Wall::Slip;
+  for (int a : {1, 2}) cfg.walls.lo[a] = cfg.walls.hi[a] = kern::Wall::Slip;
+  Particles P = fill_rectangle(g, 2, Box{{0.0, 0.0, 0.0}, {L, h, h}}, 1.0, Vector{}, 0);
+  for (std::size_t i = 0; i < P.size(); ++i) P.v[0][i] = 0.1 * std::sin(M_PI * P.x[0][i] / (2 * L));
+  Material m;
+  m.name = "elastic";
+  m.rho0 = 1.0;
+  m.E = 100.0;
+  m.nu = 0.0;
+  Simulation sim(g, cfg, {m}, {0}, P);
+  double M = 0;
+  for (double mi : sim.particles().m) M += mi;
+  std::vector<double> zeros;  // zero crossings of the centre-of-mass velocity
+  double amp = 0, prev_t = 0, prev_v = sim.momentum()[0] / M;
+  while (sim.time() < 20.0) {
+    sim.step(20.0 - sim.time());
+    const double v = sim.momentum()[0] / M;
+    if ((prev_v > 0) != (v > 0)) zeros.push_back(prev_t + (sim.time() - prev_t) * prev_v / (prev_v - v));
+    if (sim.time() > 15.0) amp = std::max(amp, std::fabs(v));
+    prev_t = sim.time();
+    prev_v = v;
+  }
+  REQUIRE(zeros.size() >= 4);
+  const double period = (zeros[3] - zeros[0]) / 1.5;
+  WARN("3D bar: period " << period << " (exact 10), amplitude " << amp << " (exact " << 0.2 / M_PI << ")");
+  CHECK(period == Approx(10.0).epsilon(0.01));
+  CHECK(amp == Approx(0.2 / M_PI).epsilon(0.02));
+}
+
+TEST_CASE("3D: dense column at 1000 m/s against the exact Hugoniot and the 2D strip", "[verification][shock][3d]") {
+  const auto r3 = verify::column_impact<3>("dense_impact_1000_3d.toml");
+  const auto r2 = verify::column_impact<2>("dense_impact_1000.toml");
+  WARN("3D: Us " << r3.Us << " (exact " << r3.exact_Us << ", 2D " << r2.Us << "), wall " << r3.wall * 1e-9
+                 << " GPa (exact " << r3.exact_P * 1e-9 << ", 2D " << r2.wall * 1e-9 << "), P " << r3.P * 1e-9
+                 << " rho " << r3.rho << " T " << r3.T << ", energy residual " << r3.energy_residual << ", "
+                 << r3.particles << " points, " << r3.steps << " steps");
+  CHECK(r3.finite);
+  CHECK(r3.Us == Approx(r3.exact_Us).epsilon(0.003));
+  CHECK(r3.wall == Approx(r3.exact_P).epsilon(0.003));
+  CHECK(r3.Us == Approx(r2.Us).epsilon(0.001));
+  CHECK(r3.wall == Approx(r2.wall).epsilon(0.001));
+  // the plateau as test_shock bounds it in 2D
+  CHECK(r3.P == Approx(r3.exact_P).epsilon(0.02));
+  CHECK(r3.rho == Approx(r3.exact_rho).epsilon(0.01));
+  CHECK(r3.T == Approx(r3.exact_T).epsilon(0.05));
+  // energy: kinetic + internal + what the slip wall took, constant to round-off
+  CHECK(std::fabs(r3.energy_residual) < 1e-10);
+}
+
+// The void's open volume (open_area on voxels, as voids.csv) before and after the shock.
+TEST_CASE("3D: a spherical void collapses and closes, energy conserved", "[verification][porous][3d]") {
+  Scene sc = verify_scene("void_collapse_3d.toml");
+  const auto& g = sc.geom;
+  const double pixel = 0.5 * g.h / 3;
+  Window all;
+  Vector origin;
+  for (int d = 0; d < 3; ++d) {
+    all.lo[d] = d == kImpactAxis ? -1e300 : g.lo[d];
+    all.hi[d] = d == kImpactAxis ? 1e300 : g.lo[d] + g.length(d);
+    origin[d] = g.lo[d];
+  }
+  const double V0 = open_area(sc.particles, 0, {all}, pixel, kCoverRadius, periods(g), origin)[0];
+  Simulation sim(g, sc.solver, sc.materials, sc.body_material, sc.particles);
+  const double E0 = sim.energy().total();
+  while (sim.time() < sc.run.end_time) sim.step(sc.run.end_time - sim.time());
+  const double V1 = open_area(sim.particles(), 0, {all}, pixel, kCoverRadius, periods(g), origin)[0];
+  const double lost = sim.removed_is_heat() ? 0.0 : sim.removed().wall + sim.removed().contact;
+  const double residual = (sim.energy().total() + lost - E0) / E0;
+  const double sphere = 4.0 / 3.0 * M_PI * std::pow(10e-6, 3);
+  WARN("3D void: open volume " << V0 * 1e18 << " um^3 at t = 0 (sphere " << sphere * 1e18 << "), " << V1 * 1e18
+                               << " um^3 at " << sim.time() * 1e9 << " ns; energy residual " << residual);
+  // at t = 0 the points' balls reach into the void by about a point spacing: most of it is open
+  CHECK(V0 > 0.5 * sphere);
+  CHECK(V0 < sphere);
+  CHECK(V1 < 0.01 * V0);
+  CHECK(std::fabs(residual) < 1e-10);
+}
+
+TEST_CASE("3D determinism: bitwise-identical particle arrays with 1, 2 and 3 threads", "[determinism][3d]") {
+  const int threads0 = omp_get_max_threads();
+  std::vector<Particles> out;
+  for (int threads : {1, 2, 3}) {
+    omp_set_num_threads(threads);
+    Scene sc = verify_scene("void_collapse_3d.toml", {"solver.permute_every=7"});
+    Simulation sim(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+    for (int s = 0; s < 60; ++s) sim.step();
+    out.push_back(sim.particles());
+  }
+  omp_set_num_threads(threads0);
+  for (int k : {1, 2}) {
+    INFO("threads " << k + 1 << " against 1");
+    REQUIRE(out[0].id == out[k].id);
+    test::require_same(out[0], out[k], kAllArrays);
+  }
+}
+
+TEST_CASE("3D restart: a resumed simulation steps bitwise like the uninterrupted one", "[checkpoint][restart][3d]") {
+  Scene sc = verify_scene("void_collapse_3d.toml");
+  Simulation a(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  for (int s = 0; s < 30; ++s) a.step();
+  const auto file = std::filesystem::temp_directory_path() / "smpm_test_3d_ckpt.bin";
+  {
+    CheckpointWriter w(file);
+    a.save(w);
+    w.commit();
+  }
+  Simulation b(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
+  b.restore(CheckpointReader(file));
+  std::filesystem::remove(file);
+  for (int s = 0; s < 30; ++s) {
+    a.step();
+    b.step();
+  }
+  REQUIRE(a.particles().id == b.particles().id);
+  test::require_same(a.particles(), b.particles(), kAllArrays);
+  CHECK(a.time() == b.time());
+  CHECK(a.energy().total() == b.energy().total());
+}
