@@ -216,20 +216,17 @@ def porous_values(out):
 
 
 def richardson(hs, vals):
-    """Limit and observed order from the three finest (h halving); else the finest value. An
-    observed order outside 0.5-4 is not asymptotic (band III's mean P at one time swings by
-    0.3-0.5 GPa and gives 0.3, which would extrapolate 15 % past the finest run): the finest
-    value then stands in, and the order is reported as nan."""
+    """Limit and observed order from the three finest (porous_convergence.richardson); else the
+    finest value. An observed order outside 0.5-4 is not asymptotic (band III's mean P at one
+    time swings by 0.3-0.5 GPa and gives 0.3, which would extrapolate 15 % past the finest run):
+    the finest value then stands in, and the order is reported as nan."""
     order = sorted(range(len(hs)), key=lambda i: -hs[i])
     hs = [hs[i] for i in order]
     vals = [vals[i] for i in order]
     if len(vals) >= 3:
-        f1, f2, f3 = vals[-3:]
-        d1, d2 = f1 - f2, f2 - f3
-        if d1 != 0 and d2 != 0 and d1 / d2 > 1:
-            p = math.log2(d1 / d2)
-            if 0.5 <= p <= 4.0:
-                return f3 - d2 / (2 ** p - 1), p
+        limit, p = pc.richardson(hs[-3:], vals[-3:])
+        if math.isfinite(p) and 0.5 <= p <= 4.0:
+            return limit, p
     return vals[-1], float("nan")
 
 

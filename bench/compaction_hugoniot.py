@@ -91,7 +91,8 @@ def swept_porosity(out, t, y, v, t1, t2, spacing):
     heights y0 = y_front(t) + v t (material ahead of the front falls at v), counted on the
     t = 0 snapshot's lattice (points of spacing `spacing` um; the voids' points are absent).
     A random sample's porosity varies along y (Poisson: +-0.03 in 200 um bands of the 384 um
-    strip at 0.5), and near porosity 0.5 the compacted front moves 4 % per 0.01 of porosity."""
+    strip at 0.5), and near porosity 0.5 the compacted front moves 4 % per 0.01 of porosity. 2D or
+    3D (the snapshot's position has 2 or 3 columns)."""
     import glob
     import h5py
     snaps = sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5")))
@@ -101,10 +102,13 @@ def swept_porosity(out, t, y, v, t1, t2, spacing):
         p = f["particles/position"][:] * 1e6
     lo = float(np.interp(t1, t, y)) + v * t1 * 1e-3
     hi = float(np.interp(t2, t, y)) + v * t2 * 1e-3
-    xs = np.unique(np.round(p[:, 0], 6))
-    width = xs.max() - xs.min() + spacing
+    # the lateral extent: width along x (and z in 3D), one lattice spacing per site
+    across = 1.0
+    for a in [0] + list(range(2, p.shape[1])):
+        xs = np.unique(np.round(p[:, a], 6))
+        across *= xs.max() - xs.min() + spacing
     n = np.count_nonzero((p[:, 1] >= lo) & (p[:, 1] < hi))
-    return 1.0 - n * spacing * spacing / (width * (hi - lo))
+    return 1.0 - n * spacing ** p.shape[1] / (across * (hi - lo))
 
 
 def hugoniot_at(driver, case, sets, porosity):

@@ -21,7 +21,7 @@ size, then tabulates per run, for the region (default III) at the last series.cs
   cost     particle-steps and wall seconds (run.json)
 
 and, with three or more cell sizes, the Richardson limit of the front speed from the three finest
-(observed order p = log2(d1 / d2) for halving h) and each run's error against it, plus the fully
+(observed order p from the three, any ratio of cell sizes; richardson()) and each run's error against it, plus the fully
 compacted Rankine-Hugoniot front from run.json (compacted_hugoniot).
 
   /usr/bin/python3 bench/porous_convergence.py [--h 4,2,1] [--set KEY=VALUE ...] [--out DIR]
@@ -74,7 +74,8 @@ def last_band(outdir, run, region):
     with h5py.File(snaps[-1], "r") as f:
         y = f["particles/position"][:, 1] * 1e6  # m -> um
         sel = (f["particles/body"][:] == reg["body"]) & (y >= reg["y_range_um"][0]) & (y <= reg["y_range_um"][1])
-        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy", "energy"]
+        names = ["pressure", "density", "stress_xx", "stress_yy", "stress_xy", "stress_zz", "stress_xz",
+                 "stress_yz", "energy"]
         return {k: f["particles/" + k][:][sel] for k in names if "particles/" + k in f}
 
 
@@ -118,7 +119,10 @@ def open_split(outdir, run, region):
         return math.nan, math.nan
     m, area, rho0 = geom
     V = m / band["density"]
-    fr = (band["pressure"] == 0.0) & (band["stress_xx"] == 0.0) & (band["stress_yy"] == 0.0) & (band["stress_xy"] == 0.0)
+    fr = band["pressure"] == 0.0
+    for k in ("stress_xx", "stress_yy", "stress_xy", "stress_xz", "stress_yz"):  # zz: -P in 2D, not 0
+        if k in band:
+            fr &= band[k] == 0.0
     rho_zp = zero_pressure_density(run, band.get("energy"), rho0)
     rz = np.broadcast_to(rho_zp, V.shape)[fr]
     # no zero-pressure density (e past c0^2 / gamma0): the point holds all its V, as in the engine
@@ -128,18 +132,22 @@ def open_split(outdir, run, region):
 
 
 def band_geometry(run, region):
-    """(mass per point [kg/m], band area [m^2], rho0 [kg/m^3]) of the target's region from
-    run.json: equal point masses (a lattice sample), the grid's width (periodic sides); None
-    without what it needs."""
+    """(mass per point [kg/m in 2D, kg in 3D], band size [m^2 per unit depth in 2D, m^3 in 3D],
+    rho0 [kg/m^3]) of the target's region from run.json: equal point masses (a lattice sample),
+    the grid's width along x (and z in 3D; periodic sides); None without what it needs."""
     try:
         body = next(b for b in run["bodies"] if b["name"] == "target")
         rho0 = run["case_resolved"]["materials"][body["material"]]["density_kg_m3"]
         reg = next(r for r in run["regions"] if r["name"] == region)
-        gx = run["case_resolved"]["grid"]["x_range_um"]
+        grid = run["case_resolved"]["grid"]
     except (KeyError, StopIteration):
         return None
-    m = rho0 * body["area_m2"] / body["particles"]
-    return m, (gx[1] - gx[0]) * (reg["y_range_um"][1] - reg["y_range_um"][0]) * 1e-12, rho0
+    size = (reg["y_range_um"][1] - reg["y_range_um"][0]) * 1e-6
+    for k in ("x_range_um", "z_range_um"):
+        if k in grid:
+            size *= (grid[k][1] - grid[k][0]) * 1e-6
+    m = rho0 * body.get("area_m2", body.get("volume_m3", math.nan)) / body["particles"]
+    return m, size, rho0
 
 
 def bulk_density(run, region, count):
@@ -178,8 +186,9 @@ def summarise(outdir, region, window, driver=None):
     series = [r for r in read_csv(os.path.join(outdir, "series.csv")) if r["region"] == region]
     last = series[-1]
     energy = read_csv(os.path.join(outdir, "energy.csv"))
-    e0, e1 = float(energy[0]["total_J_per_m"]), float(energy[-1]["total_J_per_m"])
-    res = float(energy[-1].get("residual_J_per_m", "nan"))
+    unit = "J_per_m" if "total_J_per_m" in energy[0] else "J"  # 2D: per unit depth; 3D: whole
+    e0, e1 = float(energy[0]["total_" + unit]), float(energy[-1]["total_" + unit])
+    res = float(energy[-1].get("residual_" + unit, "nan"))
     comp = next((b.get("compacted_hugoniot", {}) for b in run.get("bodies", []) if "compacted_hugoniot" in b), {})
     phi, swept_rh = swept_hugoniot(outdir, run, window, driver) if driver else (math.nan, math.nan)
     return {
@@ -203,6 +212,30 @@ def summarise(outdir, region, window, driver=None):
         "rh_front": comp.get("front_speed_wall_frame_m_s", math.nan),
         "status": run.get("status", "?"),
     }
+
+
+def richardson(hs, vals):
+    """Richardson limit and observed order p of three values at cell sizes h1 > h2 > h3 (any
+    ratios): f(h) = f0 + C h^p through the three points, p from (f1 - f2) / (f2 - f3) =
+    (h1^p - h2^p) / (h2^p - h3^p) by bisection on 0.05-8. (nan, nan) where the differences do
+    not shrink monotonically."""
+    (h1, f1), (h2, f2), (h3, f3) = sorted(zip(hs, vals), key=lambda t: -t[0])
+    d1, d2 = f1 - f2, f2 - f3
+    if d1 == 0 or d2 == 0 or d1 / d2 <= 0:
+        return math.nan, math.nan
+    ratio = d1 / d2
+    g = lambda p: (h1 ** p - h2 ** p) / (h2 ** p - h3 ** p) - ratio
+    lo, hi = 0.05, 8.0
+    if g(lo) * g(hi) > 0:
+        return math.nan, math.nan
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if g(lo) * g(mid) <= 0:
+            hi = mid
+        else:
+            lo = mid
+    p = 0.5 * (lo + hi)
+    return f3 - d2 * h3 ** p / (h2 ** p - h3 ** p), p
 
 
 def main():
@@ -241,11 +274,8 @@ def main():
         sys.exit(1)
     limit = math.nan
     if len(rows) >= 3:
-        f1, f2, f3 = (r["front"] for r in rows[-3:])
-        d1, d2 = f1 - f2, f2 - f3
-        if d1 != 0 and d2 != 0 and d1 / d2 > 1:
-            p = math.log2(d1 / d2)
-            limit = f3 - d2 / (2 ** p - 1)
+        limit, p = richardson([r["h_um"] for r in rows[-3:]], [r["front"] for r in rows[-3:]])
+        if math.isfinite(limit):
             print(f"Richardson: observed order {p:.2f}, limit {limit:.0f} m/s", file=sys.stderr)
     rh = rows[0]["rh_front"]
     print(f"Front over {window[0]:g}-{window[1]:g} ns; region {a.region} at {rows[0]['time_ns']:g} ns. "

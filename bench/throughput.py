@@ -36,6 +36,8 @@ SCENES = {
     "elastic_block": ("grid.cell_size_m", {"1e5": 0.0025, "1e6": 0.0008, "4e6": 0.0004}),
     "dense_shock": ("grid.cell_size_um", {"1e5": 4.0, "1e6": 1.25, "4e6": 0.625}),
     "porous_shock": ("grid.cell_size_um", {"1e5": 2.5, "1e6": 0.8, "4e6": 0.4}),
+    "dense_shock_3d": ("grid.cell_size_um", {"1e5": 10.0, "1e6": 4.0, "4e6": 2.5}),
+    "porous_shock_3d": ("grid.cell_size_um", {"1e5": 6.25, "1e6": 3.125, "4e6": 2.0}),
 }
 PHASES = ["sort", "p2g", "grid", "contact", "g2p", "constitutive", "heat", "diagnostics", "output"]
 STEP_PHASES = PHASES[:7]  # the time step itself

@@ -615,13 +615,15 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
                     (spec.radius_spread > 0 ? " - radius_spread " + format_number(spec.radius_spread * 1e6) + " um" : "") +
                     " is below the point spacing " + format_number(spacing * 1e6) +
                     " um (grid.cell_size / points_per_cell); allowed: at least the spacing, or use smaller cells");
-  double area = 1.0;  // of the bounding box [m^2]
-  for (int a = 0; a < kDim; ++a) area *= box.hi[a] - box.lo[a];
-  const double tiling = area / (M_PI * rmin * rmin);
+  double size = 1.0;  // of the bounding box [m^2 at D = 2, m^3 at D = 3]
+  for (int a = 0; a < kDim; ++a) size *= box.hi[a] - box.lo[a];
+  // voids of the smallest radius that would fill it: disks at D = 2, spheres at D = 3
+  const double tiling = size / (kDim == 2 ? M_PI * rmin * rmin : 4.0 / 3.0 * M_PI * rmin * rmin * rmin);
   const long void_limit = static_cast<long>(std::min(1e8, 50.0 * tiling + 1000.0));
   if (int(v.has("porosity")) + int(v.has("count")) + int(v.has("center")) != 1)
     throw CaseError("case table [" + v.path() + "]: give exactly one of 'porosity' (target), 'count' (number of "
-                    "random voids) and 'center' (one void there, e.g. center_um = [30.0, 50.0])");
+                    "random voids) and 'center' (one void there, e.g. center_um = " +
+                    (kDim == 2 ? "[30.0, 50.0]" : "[30.0, 50.0, 30.0]") + ")");
   if (v.has("center")) {
     spec.centers.push_back({read_vector(v, "center", kLength), spec.radius});
   } else {
@@ -634,7 +636,8 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
   return spec;
 }
 
-// [bodies.voids]: random overlapping circular voids (docs/model.md, "Porous sample") cut from P.
+// [bodies.voids]: random overlapping circular (D = 2) or spherical (D = 3) voids (docs/model.md,
+// "Porous sample") cut from P.
 void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Particles& P, BodyInfo& info) {
   CaseReader v = r.table("voids");
   const VoidSpec spec = read_voids(v, s, ppc, box);

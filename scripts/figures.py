@@ -19,6 +19,14 @@ For each OUTDIR writes PNGs under OUTDIR/figures/:
 With several OUTDIRs also compare_means.png and compare_std.png (region --region) in the first
 OUTDIR's figures/ (or --out DIR).
 
+A 3D run (positions x, y, z; y the impact axis) gives the same figures. The maps and the velocity
+field show a slice: the points in a slab one point spacing thick across z (--slice-axis; x gives
+the y-z plane) about the middle of the grid's z range (--slice-at-um), centred on the nearest
+layer of points while some points keep their lattice's layers; the titles give the slab as
+"slice z = Z ± H µm". The distributions take all the points of the region, over the whole depth
+("all z" in the title). The energy panel of history.png is in J (a 2D run's in J per metre of
+depth).
+
 A figure whose inputs are missing is skipped with a message on stderr. The paths of the PNGs
 written go to stdout. Exit status: 0 when at least one figure was written, 1 when none could be
 made, 2 on bad arguments.
@@ -190,7 +198,7 @@ class Run:
             parts.append(rf"$\Delta$ = {por:.2f}")
         v = t.get("velocity_m_s")
         if isinstance(v, (list, tuple)) and v:
-            parts.append(f"v = {math.hypot(*[to_float(x) for x in v[:2]]):.0f} m/s")
+            parts.append(f"v = {math.hypot(*[to_float(x) for x in v[:3]]):.0f} m/s")
         return ", ".join(parts)
 
     def case_range(self, key):
@@ -298,7 +306,8 @@ class Run:
         return min(snaps, key=lambda s: abs(s[0] - time_ns) if not math.isnan(s[0]) else math.inf)
 
     def load(self, path, names, target_only=True):
-        """Datasets of one snapshot: {'time_ns', 'x_um', 'y_um', names...}, target body only."""
+        """Datasets of one snapshot: {'time_ns', 'x_um', 'y_um', 'z_um' (3D only), names...}, target
+        body only; 'velocity_x', 'velocity_y', 'velocity_z' name the velocity's components."""
         try:
             with h5py.File(path, "r") as f:
                 if "particles" not in f:
@@ -313,10 +322,12 @@ class Run:
                     sel = np.rint(p["body"][...]).astype(int) == self.target_index()
                 out = {"time_ns": t, "x_um": pos[sel, 0] * 1e6, "y_um": pos[sel, 1] * 1e6,
                        "file": os.path.basename(path)}
+                if pos.shape[1] > 2:
+                    out["z_um"] = pos[sel, 2] * 1e6
                 for n in names:
-                    if n in ("velocity_x", "velocity_y"):
-                        if "velocity" in p:
-                            out[n] = p["velocity"][:, 0 if n == "velocity_x" else 1][sel]
+                    if n in ("velocity_x", "velocity_y", "velocity_z"):
+                        if "velocity" in p and p["velocity"].shape[1] > "xyz".index(n[-1]):
+                            out[n] = p["velocity"][:, "xyz".index(n[-1])][sel]
                     elif n in p:
                         out[n] = p[n][...][sel]
         except (OSError, KeyError) as e:
@@ -441,14 +452,45 @@ def pixel_map(ax, x, y, values, spacing_um, cmap, rng):
                      vmin=rng[0], vmax=rng[1], interpolation="nearest", aspect="equal")
 
 
+def plane_slice(run, d, a):
+    """The points of snapshot `d` (Run.load) that a map shows: all of a 2D snapshot; of a 3D one,
+    those in a slab one point spacing thick across --slice-axis about --slice-at-um (default the
+    middle of the grid's range on that axis). While a tenth or more of the points keep the layers
+    of their lattice (ahead of the shock), the slab is centred on the layer nearest there: a slab
+    edge on a layer would take two layers or none. Returns (points, the horizontal axis of the map, "x" or "z",
+    the slab for titles "slice z = Z ± H µm", "" in 2D)."""
+    if "z_um" not in d:
+        return d, "x", ""
+    axis = a.slice_axis
+    c = d[f"{axis}_um"]
+    h = run.spacing_um() or (np.ptp(d["x_um"]) * np.ptp(d["y_um"]) * np.ptp(d["z_um"]) / c.size) ** (1 / 3)
+    at = a.slice_at_um
+    if at is None:
+        try:
+            at = 0.5 * sum(float(v) for v in run.case["grid"][f"{axis}_range_um"])
+        except (KeyError, TypeError, ValueError):
+            at = 0.5 * (c.min() + c.max())
+    phase = np.mean(np.exp(2j * np.pi * c / h))
+    if abs(phase) > 0.1:  # the layers lie at offset + k h (a random cloud gives |phase| ~ n^-1/2)
+        offset = np.angle(phase) / (2 * np.pi) * h
+        at = offset + round((at - offset) / h) * h
+    sel = (c >= at - 0.5 * h) & (c < at + 0.5 * h)
+    text = f"slice {axis} = {at:.1f} ± {0.5 * h:.3g} µm"
+    if not np.any(sel):
+        raise Skip(f"no target particle in the {text}")
+    return ({k: v[sel] if isinstance(v, np.ndarray) else v for k, v in d.items()},
+            "z" if axis == "x" else "x", text)
+
+
 # ----------------------------------------------------------------------------------------------
 # Figures of one directory
 
 
 def fig_maps(run, a):
     snap_t, path = run.nearest_snapshot(a.time_ns)
-    d = run.load(path, ["pressure", "temperature"])
-    x, y = d["x_um"], d["y_um"]
+    d, lat, cut = plane_slice(run, run.load(path, ["pressure", "temperature"]), a)
+    x, y = d[f"{lat}_um"], d["y_um"]
+    cut = f", {cut}" if cut else ""
     pad = 0.02 * max(np.ptp(x), np.ptp(y), 1.0)
     xlim = (x.min() - pad, x.max() + pad)
     ylim = (min(0.0, y.min()) - pad, y.max() + pad)
@@ -473,10 +515,10 @@ def fig_maps(run, a):
         im = pixel_map(ax, x, y, values, run.spacing_um(), a.cmap, rng)
         cb = fig.colorbar(im, ax=ax, shrink=0.9, extend="both")
         cb.set_label(f"{key} [{unit}]")
-        ax.set_xlabel("x [µm]")
+        ax.set_xlabel(f"{lat} [µm]")
         ax.set_ylabel("y [µm] (impact plane at y = 0)")
         how = "study's range" if a.ranges == "study" and rng == STUDY_RANGES[key] else "colour range"
-        ax.set_title(f"{title} of the target at t = {d['time_ns']:.0f} ns ({how} {rng[0]:.3g}-{rng[1]:.3g} {unit})"
+        ax.set_title(f"{title} of the target at t = {d['time_ns']:.0f} ns{cut} ({how} {rng[0]:.3g}-{rng[1]:.3g} {unit})"
                      f"\n{run.label()}", fontsize=10)
         written.append(save(fig, os.path.join(figdir(run.dir), name), a.dpi))
         if abs(snap_t - a.time_ns) > 0.05 * max(a.time_ns, 1.0):
@@ -550,10 +592,11 @@ def front_at(run, time_ns):
 
 def fig_velocity(run, a):
     snap_t, path = run.nearest_snapshot(a.time_ns)
-    d = run.load(path, ["velocity_x", "velocity_y"])
-    if "velocity_y" not in d:
+    d, lat, cut = plane_slice(run, run.load(path, ["velocity_x", "velocity_y", "velocity_z"]), a)
+    if "velocity_y" not in d or f"velocity_{lat}" not in d:
         raise Skip(f"no velocity field in {d['file']}")
-    x, y, vx, vy = d["x_um"], d["y_um"], d["velocity_x"], d["velocity_y"]
+    x, y, vx, vy = d[f"{lat}_um"], d["y_um"], d[f"velocity_{lat}"], d["velocity_y"]
+    cut = f", {cut}" if cut else ""
     t = d["time_ns"]
     how = ""
     if a.vel_x:
@@ -576,7 +619,7 @@ def fig_velocity(run, a):
         y1 = max(y1, y0 + min(200.0, np.ptp(y)))
     inside = (x >= x0) & (x <= x1) & (y >= y0) & (y <= y1)
     if not np.any(inside):
-        raise Skip(f"no target particle in the window x {x0:.0f}-{x1:.0f}, y {y0:.0f}-{y1:.0f} um")
+        raise Skip(f"no target particle in the window {lat} {x0:.0f}-{x1:.0f}, y {y0:.0f}-{y1:.0f} um{cut}")
     xs, ys, us, ws = x[inside], y[inside], vx[inside], vy[inside]
     if a.vel_frame == "window":
         mu, mw = us.mean(), ws.mean()
@@ -619,9 +662,9 @@ def fig_velocity(run, a):
         ax.quiverkey(q, 0.88, 1.02, ref, f"{ref:g} m/s", labelpos="W", coordinates="axes")
     cb = fig.colorbar(q, ax=ax, shrink=0.9, extend="max")
     cb.set_label("|u - <u>| [m/s]" if a.vel_frame == "window" else "|u| [m/s]")
-    ax.set_xlabel("x [µm]")
+    ax.set_xlabel(f"{lat} [µm]")
     ax.set_ylabel("y [µm]")
-    ax.set_title(f"Velocity field at t = {t:.0f} ns, window x {x0:.0f}-{x1:.0f} µm, y {y0:.0f}-{y1:.0f} µm"
+    ax.set_title(f"Velocity field at t = {t:.0f} ns{cut}, window {lat} {x0:.0f}-{x1:.0f} µm, y {y0:.0f}-{y1:.0f} µm"
                  f"{how}\n{frame}; {sub}\n{run.label()}", fontsize=9)
     fit_markers(fig, ax, bg, run.spacing_um(), len(xs))
     return [save(fig, os.path.join(figdir(run.dir), "velocity_field.png"), a.dpi)]
@@ -710,6 +753,8 @@ def fig_distributions(run, a):
         data.append((d["time_ns"], {k: v[sel] for k, v in d.items() if isinstance(v, np.ndarray)}))
     if not data:
         raise Skip(f"{where} is empty in the chosen snapshots")
+    if "z_um" in data[0][1]:  # 3D: all the points of the region, not a slice
+        where += ", all z"
     order = [2, 0, 1, 3]  # rho, P, T, U_y as in the study
     nrow = len(data)
     fig, axes = plt.subplots(nrow, 4, figsize=(16, 3.3 * nrow + 1.0), squeeze=False,
@@ -798,21 +843,21 @@ def fig_history(run, a):
     ax.set_ylabel("wall stress [GPa]")
     ax.set_title("Normal stress on the rigid wall (compression positive)", fontsize=10)
     ax = axes[2]
+    per_m = not (energy and "total_J" in energy)  # 2D: per unit depth [J/m]; 3D: the total [J]
+    sfx, unit, title = ("_J_per_m", "J/m", "Energy per unit depth") if per_m else ("_J", "J", "Energy")
     try:
-        t, ek, ei, et = numeric(energy, "time_ns", "kinetic_J_per_m", "internal_J_per_m", "total_J_per_m")
+        t, ek, ei, et = numeric(energy, "time_ns", *(f"{k}{sfx}" for k in ("kinetic", "internal", "total")))
         ax.plot(t, ek, label="kinetic")
         ax.plot(t, ei, label="internal")
         ax.plot(t, et, "k", lw=1.5, label="total")
-        title = "Energy per unit depth"
         if et.size and np.isfinite(et[0]) and et[0] != 0:
             drift = (et[np.isfinite(et)][-1] - et[0]) / abs(et[0])
             title += f" (drift of the total: {100 * drift:+.2f} %)"
         ax.legend(fontsize=8)
     except Skip:
-        title = "Energy per unit depth"
         no_data(ax, "energy.csv missing or empty")
         note(f"note: history.png ({run.dir}): energy.csv missing or empty, panel left empty")
-    ax.set_ylabel("energy [J/m]")
+    ax.set_ylabel(f"energy [{unit}]")
     ax.set_title(title, fontsize=10)
     ax.set_xlabel("t [ns]")
     for ax in axes:
@@ -915,9 +960,16 @@ def parse_args(argv):
                          "0-50 GPa and 300-500 K)")
     ap.add_argument("--cmap", default="turbo", help="matplotlib colour map of maps and vectors; default turbo")
     ap.add_argument("--vel-x", type=float, nargs=2, metavar=("X0", "X1"),
-                    help="x window of the velocity field [um] (default: 200 um about the centre)")
+                    help="x window of the velocity field [um] (z with --slice-axis x; default: 200 um "
+                         "about the centre)")
     ap.add_argument("--vel-y", type=float, nargs=2, metavar=("Y0", "Y1"),
                     help="y window of the velocity field [um] (default: 200 um behind the front)")
+    ap.add_argument("--slice-axis", choices=("z", "x"), default="z",
+                    help="3D runs: axis across the slice of the maps and the velocity field; default z "
+                         "(the x-y plane)")
+    ap.add_argument("--slice-at-um", type=float, metavar="AT",
+                    help="3D runs: position of the slice on --slice-axis [um] (default: the middle of "
+                         "the grid's range)")
     ap.add_argument("--vel-frame", choices=("window", "lab"), default="window",
                     help="frame of the velocity vectors: the window's mean velocity (default), or the lab")
     ap.add_argument("--vel-bins", type=int, default=30,

@@ -1,12 +1,14 @@
 #!/usr/bin/env bash
-# Smoke test of scripts/figures.py: build two small synthetic shockmpm output directories (run.json,
-# series.csv with 3 regions x 5 times, front/wall/energy CSVs, the second with freesurface.csv and
-# gauges.csv instead of wall.csv, fields/particles.xdmf naming two HDF5 snapshots, plus a stale
-# snapshot it does not name), run the script on them and check that every
-# expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, and the
-# exit statuses (0 written, 1 nothing made, 2 bad arguments). series.csv's columns are the
-# engine's own: the headers of series.csv and energy.csv are read from a one-step run of the
-# driver on the quick-start case.
+# Smoke test of scripts/figures.py: build two small synthetic 2D shockmpm output directories
+# (run.json, series.csv with 3 regions x 5 times, front/wall/energy CSVs, the second with
+# freesurface.csv and gauges.csv instead of wall.csv, fields/particles.xdmf naming two HDF5
+# snapshots, plus a stale snapshot it does not name) and a 3D one (positions x, y, z on layers
+# 10 um apart in z, the 3D energy.csv columns), run the script on them and check that every
+# expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, that the
+# 3D maps take one layer of points about the mid-plane, and the exit statuses (0 written, 1
+# nothing made, 2 bad arguments). series.csv's columns are the engine's own: the headers of
+# series.csv and the 2D energy.csv are read from a one-step run of the driver on the quick-start
+# case; the 3D energy.csv header is that of a run of cases/quickstart3d.toml.
 #
 # usage: tests/figures_smoke.sh [SHOCKMPM [SOURCE_DIR]]   (default build/shockmpm of the source
 #        tree; FIGURES_SMOKE_KEEP=1 keeps the temp directory)
@@ -37,23 +39,26 @@ if ! "$EXE" run "$ROOT/cases/quickstart.toml" --quiet --threads 1 --out "$TMP/en
 fi
 SERIES_HEADER="$(head -n 1 "$TMP/engine/series.csv")"
 ENERGY_HEADER="$(head -n 1 "$TMP/engine/energy.csv")"
+ENERGY_HEADER_3D="time_ns,kinetic_J,internal_J,total_J,momentum_x_kg_m_s,momentum_y_kg_m_s,momentum_z_kg_m_s,wall_removed_J,contact_removed_J,residual_J"
 
-"$PY" - "$TMP" "$SERIES_HEADER" "$ENERGY_HEADER" <<'EOF'
+"$PY" - "$TMP" "$SERIES_HEADER" "$ENERGY_HEADER" "$ENERGY_HEADER_3D" <<'EOF'
 import json, os, sys
 import h5py
 import numpy as np
 
-def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
+def make(outdir, case, porosity, speed, with_T=True, with_wall=True, dim=2):
     rng = np.random.default_rng(7)
     os.makedirs(os.path.join(outdir, "fields"), exist_ok=True)
     run = {
         "case": case,
-        "bodies": [{"name": "target", "porosity": porosity, "velocity_m_s": [0.0, -speed],
+        "bodies": [{"name": "target", "porosity": porosity, "velocity_m_s": [0.0, -speed, 0.0][:dim],
                     "material": "al", "particles": 600}],
         "case_resolved": {"grid": {"cell_size_um": 20.0},
                           "bodies": [{"name": "target", "points_per_cell": 2}]},
         "particles": 700, "wall_seconds": 1.5,
     }
+    if dim == 3:  # a column 200 um deep in z, points on the layers z = 5, 15, ..., 195 um
+        run["case_resolved"]["grid"].update(dimension=3, z_range_um=[0.0, 200.0])
     json.dump(run, open(os.path.join(outdir, "run.json"), "w"), indent=1)
 
     times = [0.0, 100.0, 200.0, 300.0, 400.0]
@@ -97,18 +102,21 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
                 for g, y in (("g_0", 100.0), ("g_1", 200.0)):
                     p = 15.0 if 2 * y < t < 300 else 0.0
                     f.write(f"{t},{g},10,{y},0,{-speed},{-p},{-p},0,{p},2.7,300\n")
+    columns_e, per = (energy_columns, "_per_m") if dim == 2 else (energy_columns_3d, "")
     with open(os.path.join(outdir, "energy.csv"), "w") as f:
-        f.write(",".join(energy_columns) + "\n")  # the engine's header (a one-step run)
+        f.write(",".join(columns_e) + "\n")  # the engine's header
         for t in np.arange(0.0, 501.0, 20.0):
             ek = 100 * (1 - t / 1000)
-            val = {"time_ns": t, "kinetic_J_per_m": ek, "internal_J_per_m": 100 - ek, "total_J_per_m": 100.0,
-                   "momentum_y_kg_m_s_per_m": -0.2 * ek / 100}
-            f.write(",".join(str(val.get(c, 0.0)) for c in energy_columns) + "\n")
+            val = {"time_ns": t, f"kinetic_J{per}": ek, f"internal_J{per}": 100 - ek, f"total_J{per}": 100.0,
+                   f"momentum_y_kg_m_s{per}": -0.2 * ek / 100}
+            f.write(",".join(str(val.get(c, 0.0)) for c in columns_e) + "\n")
 
-    def snapshot(step, t_ns, n=600):
+    def snapshot(step, t_ns, n=600 if dim == 2 else 6000):
         front = 1.5 * t_ns
         x = rng.uniform(0, 200e-6, n)
         y = rng.uniform(0, 1000e-6, n)
+        z = (rng.integers(0, 20, n) + 0.5) * 10e-6 if dim == 3 else np.zeros(n)  # 3D: on layers
+        vz = 50 * np.sin(2 * np.pi * x / 50e-6) if dim == 3 else np.zeros(n)
         behind = y * 1e6 < front
         p = np.where(behind, 20e9 + 4e9 * rng.standard_normal(n), 1e8 * rng.random(n))
         vx = np.where(behind, 200 * np.sin(2 * np.pi * y / 50e-6), 0.0)
@@ -117,14 +125,15 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
         m = 100
         x = np.concatenate([x, rng.uniform(0, 200e-6, m)])
         y = np.concatenate([y, rng.uniform(-300e-6, -10e-6, m)])
+        z = np.concatenate([z, rng.uniform(0, 200e-6, m) if dim == 3 else np.zeros(m)])
         body = np.concatenate([np.zeros(n), np.ones(m)])
         pad = lambda a, v: np.concatenate([a, np.full(m, v)])
         with h5py.File(os.path.join(outdir, "fields", f"snap_{step:08d}.h5"), "w") as f:
             g = f.create_group("particles")
             g.attrs["time"] = t_ns * 1e-9
             g.attrs["step"] = step
-            g["position"] = np.stack([x, y], 1)
-            g["velocity"] = np.stack([pad(vx, 0.0), pad(vy, 1000.0), np.zeros(n + m)], 1)
+            g["position"] = np.stack([x, y, z][:dim], 1)
+            g["velocity"] = np.stack([pad(vx, 0.0), pad(vy, 1000.0), pad(vz, 0.0)], 1)
             g["pressure"] = pad(p, 99e9)
             g["density"] = pad(np.where(behind, 2650 + 80 * rng.standard_normal(n), 1350.0), 9999.0)
             if with_T:
@@ -147,8 +156,8 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
         <Topology TopologyType="Polyvertex" NumberOfElements="{n}" NodesPerElement="1">
           <DataItem Dimensions="{n}" NumberType="Int" Precision="4" Format="HDF">{fname}:/topology/polyvertex</DataItem>
         </Topology>
-        <Geometry GeometryType="XY">
-          <DataItem Dimensions="{n} 2" NumberType="Float" Precision="8" Format="HDF">{fname}:/particles/position</DataItem>
+        <Geometry GeometryType="{'XYZ'[:dim]}">
+          <DataItem Dimensions="{n} {dim}" NumberType="Float" Precision="8" Format="HDF">{fname}:/particles/position</DataItem>
         </Geometry>
         <Attribute Name="pressure" AttributeType="Scalar" Center="Node">
           <DataItem Dimensions="{n}" NumberType="Float" Precision="8" Format="HDF">{fname}:/particles/pressure</DataItem>
@@ -163,6 +172,7 @@ def make(outdir, case, porosity, speed, with_T=True, with_wall=True):
 tmp = sys.argv[1]
 columns = sys.argv[2].strip().split(",")
 energy_columns = sys.argv[3].strip().split(",")
+energy_columns_3d = sys.argv[4].strip().split(",")
 if not {"time_ns", "kinetic_J_per_m", "internal_J_per_m", "total_J_per_m"} <= set(energy_columns):
     sys.exit(f"figures_smoke: the engine's energy.csv header lacks the energy columns: {energy_columns}")
 need = {"time_ns", "region", "P_mean_GPa", "P_std_GPa", "T_mean_K", "rho_mean_gcc", "Uy_mean_ms",
@@ -171,6 +181,7 @@ if not need <= set(columns):
     sys.exit(f"figures_smoke: the engine's series.csv header lacks {sorted(need - set(columns))}: {columns}")
 make(os.path.join(tmp, "a"), "smoke_a", 0.50, 1000.0)
 make(os.path.join(tmp, "b"), "smoke_b", 0.41, 800.0, with_T=False, with_wall=False)
+make(os.path.join(tmp, "c"), "smoke_3d", 0.50, 1000.0, dim=3)
 os.makedirs(os.path.join(tmp, "empty"))
 EOF
 
@@ -207,6 +218,42 @@ grep -q "skip map_T.png" "$TMP/stderr" || { echo "no skip message for map_T.png"
 grep -q "skip freesurface.png ($TMP/a): no freesurface.csv" "$TMP/stderr" || { echo "no skip message for freesurface.png" >&2; fail=1; }
 n_written=$(grep -c '\.png$' "$TMP/stdout" || true)
 [ "$n_written" = 18 ] || { echo "stdout names $n_written PNGs, expected 18" >&2; fail=1; }
+
+echo "== figures.py on a synthetic 3D run"
+set +e
+"$PY" "$SCRIPT" "$TMP/c" --time-ns 500 >"$TMP/stdout3" 2>"$TMP/stderr3"
+rc=$?
+set -e
+cat "$TMP/stdout3" "$TMP/stderr3"
+[ "$rc" = 0 ] || { echo "figures.py (3D) exited $rc, expected 0" >&2; fail=1; }
+C="$TMP/c/figures"
+check "$C"/{map_P,map_T,series_means,series_std,velocity_field,dissipation,distributions,history}.png
+n_written=$(grep -c '\.png$' "$TMP/stdout3" || true)
+[ "$n_written" = 8 ] || { echo "3D: stdout names $n_written PNGs, expected 8" >&2; fail=1; }
+if grep -v "skip freesurface.png" "$TMP/stderr3" | grep -q "skip\|energy.csv missing"; then
+  echo "3D: a figure or the energy panel was skipped" >&2; fail=1
+fi
+# the maps' slice: the one layer of points nearest the mid-plane z = 100 um (z = 95 or 105 um)
+"$PY" - "$SCRIPT" "$TMP/c" <<'EOF' || fail=1
+import os, sys
+import numpy as np
+sys.path.insert(0, os.path.dirname(sys.argv[1]))
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+import figures
+run = figures.Run(sys.argv[2])
+d = run.load(run.nearest_snapshot(500.0)[1], ["pressure"])
+s, lateral, text = figures.plane_slice(run, d, figures.parse_args([sys.argv[2]]))
+z = s["z_um"]
+ok = (lateral == "x" and np.ptp(z) < 1e-9 and abs(abs(z[0] - 100.0) - 5.0) < 1e-9
+      and z.size == np.count_nonzero(np.isclose(d["z_um"], z[0])) and text == f"slice z = {z[0]:.1f} ± 5 µm")
+print(("ok  " if ok else "BAD ") + f" 3D slice: {z.size} points, {text!r}, lateral axis {lateral}")
+sys.exit(0 if ok else 1)
+EOF
+set +e  # the y-z plane
+"$PY" "$SCRIPT" "$TMP/c" --time-ns 500 --only map,velocity --slice-axis x --slice-at-um 60 >/dev/null; rc=$?
+set -e
+[ "$rc" = 0 ] || { echo "figures.py (3D, --slice-axis x) exited $rc, expected 0" >&2; fail=1; }
+check "$C"/{map_P,map_T,velocity_field}.png
 
 echo "== exit statuses"
 set +e

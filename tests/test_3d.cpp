@@ -165,3 +165,39 @@ TEST_CASE("3D restart: a resumed simulation steps bitwise like the uninterrupted
   CHECK(a.time() == b.time());
   CHECK(a.energy().total() == b.energy().total());
 }
+
+namespace {
+// The message of the CaseError that building cases/verify/<file> with `sets` throws ("" if none).
+std::string error_of(const std::vector<std::string>& sets) {
+  try {
+    verify_scene("void_collapse_3d.toml", sets);
+  } catch (const CaseError& e) {
+    return e.what();
+  }
+  return "";
+}
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+}  // namespace
+
+TEST_CASE("3D case keys: a missing or 2D-only key is refused by name", "[case][3d]") {
+  CHECK(error_of({}) == "");
+  auto without = [](const char* table, const char* key) {
+    auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/void_collapse_3d.toml");
+    if (std::string(table) == "grid") doc["grid"].as_table()->erase(key);
+    else doc["bodies"].as_array()->get(0)->as_table()->erase(key);
+    try {
+      build_scene(doc, "t", std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
+    } catch (const CaseError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK(has(without("grid", "z_range_um"), "z_range"));
+  CHECK(has(without("bodies", "z_range_um"), "z_range"));
+  CHECK(has(error_of({"bodies.0.velocity_m_s=[0.0, -1000.0]"}), "expected 3 numbers"));
+  CHECK(has(error_of({"bodies.0.voids.center_um=[32.0, 50.0]"}), "expected 3 numbers"));
+  CHECK(has(error_of({"bodies.0.shape=\"disk\""}), "allowed 'box', 'sphere'"));
+  CHECK(has(error_of({"grid.dimension=2"}), "this engine is built for 3 axes"));
+  CHECK(has(error_of({"grid.tile_cells=16"}), "allowed 4 to 8"));
+  CHECK(has(error_of({"walls.front=\"slip\""}), "periodic_z = true has no back or front wall"));
+}

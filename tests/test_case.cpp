@@ -74,6 +74,14 @@ TEST_CASE("case errors name the key, the value and the allowed range", "[case]")
   CHECK(has(error_of({"walls.left=\"slip\""}), "periodic_x = true has no left or right wall"));
   CHECK(has(error_of({"grid.tile_cells=32"}), "allowed 4 to 16"));
   CHECK(has(error_of({"solver.scheme=musl"}), "not valid TOML"));
+  // keys of the third axis in a 2D case: refused by name
+  CHECK(has(error_of({"grid.z_range_um=[0.0, 40.0]"}), "'grid.z_range' belongs to axis z"));
+  CHECK(has(error_of({"grid.periodic_z=true"}), "'grid.periodic_z' belongs to axis z"));
+  CHECK(has(error_of({"walls.front=\"slip\""}), "'walls.front' is a wall across axis z"));
+  CHECK(has(error_of({"bodies.0.z_range_um=[0.0, 40.0]"}), "'bodies[0].z_range' belongs to axis z"));
+  CHECK(has(error_of({"bodies.0.velocity_m_s=[0.0, -100.0, 0.0]"}), "expected two numbers"));
+  CHECK(has(error_of({"bodies.0.shape=\"sphere\""}), "allowed 'rectangle', 'disk'"));
+  CHECK(has(error_of({"grid.dimension=4"}), "grid.dimension"));
 }
 
 TEST_CASE("a particle whose volume turns non-positive stops the run with a clear message", "[case][failure]") {

@@ -145,17 +145,28 @@ struct Snap {
   std::vector<SnapshotField> fields;
 };
 
-Snap make_snapshot(std::size_t n, double time, long step, bool with_temperature) {
+// A snapshot of n points over `axes` axes: position and velocity with `axes` components,
+// pressure, with 3 axes a symmetric tensor (Tensor6), optionally a temperature.
+Snap make_snapshot(std::size_t n, double time, long step, bool with_temperature, int axes = 2) {
   Snap s{n, time, step, {}};
-  SnapshotField pos{"position", "m", 2, {}}, vel{"velocity", "m/s", 2, {}}, p{"pressure", "Pa", 1, {}};
+  SnapshotField pos{"position", "m", axes, {}}, vel{"velocity", "m/s", axes, {}}, p{"pressure", "Pa", 1, {}};
   for (std::size_t i = 0; i < n; ++i) {
     pos.data.push_back(1e-3 * static_cast<double>(i));
     pos.data.push_back(-2e-3 * static_cast<double>(i) + static_cast<double>(step));
     vel.data.push_back(100.0 + static_cast<double>(i));
     vel.data.push_back(-50.0 - static_cast<double>(i) - 0.5 * static_cast<double>(step));
+    if (axes == 3) {
+      pos.data.push_back(3e-3 * static_cast<double>(i));
+      vel.data.push_back(7.0 * static_cast<double>(i));
+    }
     p.data.push_back(1e9 * static_cast<double>(i + 1) + static_cast<double>(step));
   }
   s.fields = {pos, vel, p};
+  if (axes == 3) {
+    SnapshotField t{"stress", "Pa", 6, {}};
+    for (std::size_t i = 0; i < 6 * n; ++i) t.data.push_back(-1e8 * static_cast<double>(i));
+    s.fields.push_back(t);
+  }
   if (with_temperature) {
     SnapshotField T{"temperature", "K", 1, {}};
     for (std::size_t i = 0; i < n; ++i) T.data.push_back(300.0 + static_cast<double>(i));
@@ -196,10 +207,11 @@ void check_snapshot_file(const fs::path& file, const Snap& s) {
     if (fld.components == 1) {
       REQUIRE(dims == std::vector<hsize_t>{s.n});
       for (std::size_t i = 0; i < s.n; ++i) CHECK(v[i] == fld.data[i]);
-    } else if (fld.name == "position") {
-      REQUIRE(dims == std::vector<hsize_t>{s.n, 2});
-      for (std::size_t i = 0; i < 2 * s.n; ++i) CHECK(v[i] == fld.data[i]);
-    } else {  // other vectors are stored (x, y, 0)
+    } else if (fld.name == "position" || fld.components > 2) {  // as given
+      const auto c = static_cast<std::size_t>(fld.components);
+      REQUIRE(dims == std::vector<hsize_t>{s.n, c});
+      for (std::size_t i = 0; i < c * s.n; ++i) CHECK(v[i] == fld.data[i]);
+    } else {  // other 2-component vectors are stored (x, y, 0)
       REQUIRE(dims == std::vector<hsize_t>{s.n, 3});
       for (std::size_t i = 0; i < s.n; ++i) {
         CHECK(v[3 * i] == fld.data[2 * i]);
@@ -249,6 +261,9 @@ class CaptureStderr {
 }  // namespace
 
 TEST_CASE("SnapshotWriter writes HDF5 snapshots and an XDMF temporal series", "[output]") {
+  // 2D (Geometry XY, 2-component vectors padded to 3) and 3D (XYZ, 3-component vectors, Tensor6)
+  const int axes = GENERATE(2, 3);
+  INFO("axes " << axes);
   TempDir tmp;
   const fs::path dir = tmp.path / "out" / "fields";  // nested: the writer creates it
   SnapshotWriter w(dir);
@@ -256,8 +271,8 @@ TEST_CASE("SnapshotWriter writes HDF5 snapshots and an XDMF temporal series", "[
   CHECK(w.files().empty());
 
   // Particle count and field set change between snapshots.
-  const std::vector<Snap> snaps = {make_snapshot(3, 1.5e-7, 10, false),
-                                   make_snapshot(5, 3.25e-7, 20, true)};
+  const std::vector<Snap> snaps = {make_snapshot(3, 1.5e-7, 10, false, axes),
+                                   make_snapshot(5, 3.25e-7, 20, true, axes)};
   for (const Snap& s : snaps) w.write(s.fields, s.n, s.time, s.step);
 
   REQUIRE(w.files().size() == 2);
@@ -297,7 +312,7 @@ TEST_CASE("SnapshotWriter writes HDF5 snapshots and an XDMF temporal series", "[
     CHECK(xml_attr(topo[1].str(), "NumberOfElements") == std::to_string(s.n));
     std::smatch geo;
     REQUIRE(std::regex_search(g, geo, std::regex("<Geometry([^>]*)>\\s*<DataItem[^>]*>([^<]*)</DataItem>")));
-    CHECK(xml_attr(geo[1].str(), "GeometryType") == "XY");
+    CHECK(xml_attr(geo[1].str(), "GeometryType") == (axes == 3 ? "XYZ" : "XY"));
     CHECK(geo[2].str().find(":/particles/position") != std::string::npos);
 
     // Attributes: every field but position, with the right type.
@@ -312,7 +327,8 @@ TEST_CASE("SnapshotWriter writes HDF5 snapshots and an XDMF temporal series", "[
     }
     std::map<std::string, std::string> expected_types;
     for (const SnapshotField& f : s.fields) {
-      if (f.name != "position") expected_types[f.name] = f.components == 2 ? "Vector" : "Scalar";
+      if (f.name != "position")
+        expected_types[f.name] = f.components == 1 ? "Scalar" : f.components == 6 ? "Tensor6" : "Vector";
     }
     CHECK(attr_types == expected_types);
 
@@ -339,7 +355,7 @@ TEST_CASE("SnapshotWriter writes HDF5 snapshots and an XDMF temporal series", "[
   }
 
   // Writing a step again replaces it (same file, one entry in the series).
-  Snap again = make_snapshot(4, 1.5e-7, 10, false);
+  Snap again = make_snapshot(4, 1.5e-7, 10, false, axes);
   w.write(again.fields, again.n, again.time, again.step);
   CHECK(w.files().size() == 2);
   check_snapshot_file(dir / "snap_00000010.h5", again);
@@ -364,7 +380,7 @@ TEST_CASE("SnapshotWriter rejects malformed input before writing", "[output]") {
   CHECK_THROWS_AS(w.write(wrong_size, 3, 0.0, 0), std::invalid_argument);
 
   auto bad_components = ok.fields;
-  bad_components[2].components = 3;
+  bad_components[2].components = 4;  // 1, 2, 3 or 6 allowed
   CHECK_THROWS_AS(w.write(bad_components, 3, 0.0, 0), std::invalid_argument);
 
   auto duplicate = ok.fields;
