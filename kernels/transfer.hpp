@@ -489,7 +489,7 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
   constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
   constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
   const std::size_t first = g.node(node_of(st, Idx<D>{})) + foff;
-  st.for_each([&](const Idx<D>& a, int) {
+  auto node = [&](const Idx<D>& a, int) __attribute__((always_inline)) {
     const std::size_t n = node_index(g, first, a);
     const double w = st.weight(a);
     double gv[D], lv[D];  // the node's velocity; the mid-step one of the work rate
@@ -542,7 +542,9 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
 #pragma GCC unroll 3
         for (int c = 0; c < D; ++c) S.B[r][c] += w * gv[r] * st.offset(a, c);
     }
-  });
+  };
+  if constexpr (D == 3) st.for_each_by_line(node);
+  else st.for_each(node);
   return S;
 }
 
@@ -758,9 +760,17 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
           for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
       if constexpr (kWork)
         for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
+      // 2D: vectorized across points; 3D: one point at a time, its 27-node stencil walked line by
+      // line (for_each_by_line): the vectorized 3D gather (gather instructions for 27 nodes, 21
+      // sums per point) ran the dense 3D bench 13 % slower than this (docs/performance.md)
+      if constexpr (kDim == 2) {
 #pragma omp simd
-      for (std::size_t p = first; p < last; ++p)
-        g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+        for (std::size_t p = first; p < last; ++p)
+          g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+      } else {
+        for (std::size_t p = first; p < last; ++p)
+          g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+      }
       after(first, last, L, own);
     }
 #pragma omp critical(smpm_g2p_blocks)
