@@ -14,6 +14,8 @@ Scenes and their truth:
                   exact step placed at the measured front, over v times the length; the elastic
                   precursor counts as error (large at 500 m/s)
           energy  energy.csv residual over the initial total
+  porous3d cases/verify/porous_strip_3d.toml at h = 5, 4, 3.125 um (the 3D column: 662 spherical
+          voids, the same at every h), the porous quantities against its own Richardson limit.
   porous  cases/verify/porous_strip.toml (the convergence strip: the same 105 voids at every h):
           front speed (100-190 ns fit), band III mean P, T, rho, U_y, <R^2>, <D^2>, open porosity at
           200 ns and the total energy change, each (energy, open porosity: their own value) against the Richardson extrapolation of the three finest cell sizes run
@@ -24,7 +26,8 @@ Cost: particle-steps and wall seconds (run.json), at --threads (default 2) in th
 
   /usr/bin/python3 bench/accuracy.py --quick           # about a minute: the CI subset (tests/accuracy_quick.sh)
   /usr/bin/python3 bench/accuracy.py --matrix medium   # every shape and transfer at 1000 m/s, the strip to h = 1
-  /usr/bin/python3 bench/accuracy.py --matrix porous   # the full matrix's porous runs only (about 15 min)
+  /usr/bin/python3 bench/accuracy.py --matrix porous   # the full matrix's porous runs (2D strip, 3D column)
+  /usr/bin/python3 bench/accuracy.py --matrix porous3d # the 3D column only (about 15 min on 2 cores)
   /usr/bin/python3 bench/accuracy.py                   # the full matrix (about 50 min on 2 cores)
   options: --out DIR (default bench/results), --driver build/shockmpm, --threads N, --no-charts,
            --check (exit 1 when a dense error of any setting but the linear hat exceeds its bound,
@@ -61,6 +64,8 @@ DEFAULTS = {"solver.shape": "quadratic", "solver.transfer": "apic", "solver.sche
             "bodies.target.points_per_cell": 2}
 # the quantities a setting must meet together for "cheapest within 5 % / 2 % on all"
 MAIN_Q = {"dense": ["Us", "wall", "P", "rho", "T", "energy"], "porous": ["front", "P", "rho", "T", "energy"]}
+MAIN_Q["porous3d"] = MAIN_Q["porous"]
+POROUS_SCENES = ("porous", "porous3d")  # the 2D strip and the 3D column, each its own families
 
 
 def matrix(kind):
@@ -104,6 +109,11 @@ def matrix(kind):
                             runs.append(("dense", case, {"grid.cell_size_um": h, "solver.shape": shape,
                                                          "solver.transfer": transfer, "solver.scheme": scheme,
                                                          "bodies.target.points_per_cell": ppc}))
+    # the 3D strip (spherical voids, four void-face fields), at the defaults
+    for h in (5.0, 4.0, 3.125):
+        runs.append(("porous3d", "porous_strip_3d.toml", {"grid.cell_size_um": h}))
+    if kind == "porous3d":
+        return runs
     for shape in ("quadratic", "cubic", "ugimp"):
         for transfer in ("apic", "flip"):
             for h in (8.0, 4.0, 2.0, 1.0):
@@ -248,8 +258,9 @@ def label(settings):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="the CI subset (same as --matrix quick)")
-    ap.add_argument("--matrix", choices=["quick", "medium", "porous", "full"], default="full",
-                    help="porous: the full matrix's porous strip runs only (about 15 min)")
+    ap.add_argument("--matrix", choices=["quick", "medium", "porous", "porous3d", "full"], default="full",
+                    help="porous: the full matrix's porous strip runs only (about 30 min); porous3d: the 3D column "
+                         "only (about 15 min)")
     ap.add_argument("--out", default=str(ROOT / "bench" / "results"))
     ap.add_argument("--driver", default=str(ROOT / "build" / "shockmpm"))
     ap.add_argument("--threads", type=int, default=2)
@@ -279,8 +290,8 @@ def main():
             failed.append(f"{case} {label(settings)}: {e}")
     # porous errors: against the Richardson limit of each setting family's cell-size series
     fams = {}
-    for r in (r for r in rows if r["scene"] == "porous"):
-        fam = tuple(sorted((k, v) for k, v in r["settings"].items() if k != "grid.cell_size_um"))
+    for r in (r for r in rows if r["scene"] in POROUS_SCENES):
+        fam = (("scene", r["scene"]),) + tuple(sorted((k, v) for k, v in r["settings"].items() if k != "grid.cell_size_um"))
         fams.setdefault(fam, []).append(r)
     limits = {}
     for fam, rs in fams.items():
@@ -293,10 +304,10 @@ def main():
     # one truth per quantity: the default settings' limit (quadratic APIC, its strain rate), where
     # that family has three cell sizes; else each family against its own limit. (The families'
     # own limits differ by up to 2 % on the front: docs/accuracy.md.)
-    default_fam = next((fam for fam, rs in fams.items() if len(rs) >= 3 and all(
-        DEFAULTS.get(k) == v for k, v in fam)), None)
+    default_fam = {scene: next((fam for fam, rs in fams.items() if len(rs) >= 3 and fam[0] == ("scene", scene) and all(
+        DEFAULTS.get(k) == v for k, v in fam[1:])), None) for scene in POROUS_SCENES}
     for fam, rs in fams.items():
-        ref = str(dict(fam if default_fam is None else default_fam))
+        ref = str(dict(fam if default_fam[fam[0][1]] is None else default_fam[fam[0][1]]))
         lim = limits[ref]
         for r in rs:
             r["reference"] = ref
@@ -314,9 +325,11 @@ def main():
     lines = [f"# Speed against error ({args.matrix} matrix, {stamp})", "",
              f"`/usr/bin/python3 bench/accuracy.py --matrix {args.matrix}`; errors relative (open porosity and "
              "L1_v absolute, U_y over the 1000 m/s impact speed); cost at " + str(args.threads) + " threads. "
-             "Porous errors against " + (f"the default settings' limit {dict(default_fam)}"
-                                         if default_fam is not None else "each setting family's own limit") + ".", ""]
-    for scene, qs in (("dense", ["Us", "wall", "P", "rho", "T", "L1_v", "energy"]), ("porous", POROUS_Q)):
+             "Porous errors (2D strip, 3D column) against " + "; ".join(
+                 f"{sc}: " + (f"the default settings' limit" if default_fam[sc] is not None
+                              else "each setting family's own limit") for sc in POROUS_SCENES) + ".", ""]
+    for scene, qs in (("dense", ["Us", "wall", "P", "rho", "T", "L1_v", "energy"]), ("porous", POROUS_Q),
+                      ("porous3d", POROUS_Q)):
         rs = [r for r in rows if r["scene"] == scene]
         if not rs:
             continue
@@ -371,7 +384,8 @@ def main():
         charts = [(f"dense-{case.split('_')[-1].split('.')[0]}", ["Us", "P", "T", "L1_v", "energy"],
                    [r for r in rows if r["scene"] == "dense" and r["case"] == case])
                   for case in sorted({r["case"] for r in rows if r["scene"] == "dense"})]
-        charts.append(("porous", POROUS_Q, [r for r in rows if r["scene"] == "porous"]))
+        for sc in POROUS_SCENES:
+            charts.append((sc, POROUS_Q, [r for r in rows if r["scene"] == sc]))
         for scene, qs, rs in charts:
             for q in qs:
                 if not rs:

@@ -411,10 +411,7 @@ double read_contact(CaseReader& top, const toml::table& doc, Scene& s) {
     s.solver.void_face_volume_fraction = r.number("void_face_volume_fraction", 0.1, 2.0, 0.9);
     void_reach_cells = r.number("void_face_reach_cells", 0.5, 1000.0, 3.0);
     s.solver.void_face_merge = r.boolean("void_face_merge", true);
-    // 3D: four by default with APIC (split across the impact direction too): with two, spherical
-    // voids of 4 point spacings left 9 % of the volume open behind the front and the front ran
-    // 36 % fast (docs/method.md, "Void faces in 3D")
-    const long nf = r.integer("void_face_fields", 2, 4, kDim == 3 && s.solver.transfer == Transfer::APIC ? 4 : 2);
+    const long nf = r.integer("void_face_fields", 2, 4, 2);
     if (nf == 3)
       throw CaseError("case key 'contact.void_face_fields' = 3: allowed are 2 (the faces split along the impact "
                       "direction) and 4 (split across it too, for voids a few cells wide)");
