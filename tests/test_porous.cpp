@@ -148,14 +148,14 @@ TEST_CASE("void sides: the faces of a void across the impact direction lie in di
     P.x[0][i] = xs[i];
     P.x[1][i] = ys[i];
   }
-  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 0.0);
+  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, Vector{});
   CHECK(int(P.field[0]) == 1);  // above: field 1
   CHECK(int(P.field[1]) == 0);  // below
   CHECK(int(P.field[2]) == 1);  // beside, just above the centre
   CHECK(int(P.field[3]) == 0);  // beyond reach of every void
   // periodic x: a void across the seam
   P.x[0][0] = 9.9;
-  assign_void_sides(P, {{0.1, 0.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 10.0);
+  assign_void_sides(P, {{0.1, 0.0, 1.0}}, Vector{0.0, 1.0}, 3.0, Vector{10.0, 0.0});
   CHECK(int(P.field[0]) == 1);
 }
 
@@ -169,7 +169,7 @@ TEST_CASE("void sides, four fields: the faces across and along the impact direct
     P.x[0][i] = xs[i];
     P.x[1][i] = ys[i];
   }
-  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 0.0, 4);
+  assign_void_sides(P, {{0.0, 0.0, 1.0}, {0.0, 20.0, 1.0}}, Vector{0.0, 1.0}, 3.0, Vector{}, 4);
   CHECK(int(P.field[0]) == 3);
   CHECK(int(P.field[1]) == 1);
   CHECK(int(P.field[2]) == 2);
@@ -181,7 +181,7 @@ TEST_CASE("void sides, four fields: the faces across and along the impact direct
   CHECK(P.field[1] != P.field[2]);
   CHECK(P.field[0] != P.field[1]);
   CHECK(P.field[0] != P.field[2]);
-  CHECK_THROWS_AS(assign_void_sides(P, {{0.0, 0.0, 1.0}}, Vector{0.0, 1.0}, 3.0, 0.0, 3), std::invalid_argument);
+  CHECK_THROWS_AS(assign_void_sides(P, {{0.0, 0.0, 1.0}}, Vector{0.0, 1.0}, 3.0, Vector{}, 3), std::invalid_argument);
 }
 
 // The single-void test: a void of radius 10 um in dense Al shocked at
