@@ -86,7 +86,10 @@ mkdir "$TMP/empty"
 # 4. a 3D run stopped by SIGTERM and resumed on another thread count: the driver takes the 3D
 # engine from the checkpoint's case, and every CSV is that of the uninterrupted run
 CASE3="$SRC/cases/verify/void_collapse_3d.toml"
-SET3=(--set run.end_time_ns=12.0 --set run.snapshot_interval_ns=2.0 --set run.checkpoint_interval_s=0.2)
+# (narrowed to 32 x 32 um across, 20 000 points, 10 ns)
+SET3=(--set run.end_time_ns=10.0 --set run.snapshot_interval_ns=2.0 --set run.checkpoint_interval_s=0.2
+      --set 'grid.x_range_um=[0.0, 32.0]' --set 'grid.z_range_um=[0.0, 32.0]' --set 'bodies.0.x_range_um=[0.0, 32.0]'
+      --set 'bodies.0.z_range_um=[0.0, 32.0]' --set 'bodies.0.voids.center_um=[16.0, 50.0, 16.0]')
 "$EXE" run "$CASE3" --out "$TMP/full3" --quiet --threads 2 "${SET3[@]}" || say "3D run failed"
 "$EXE" run "$CASE3" --out "$TMP/term3" --quiet --threads 2 "${SET3[@]}" 2> /dev/null &
 pid=$!
