@@ -55,6 +55,13 @@ void for_each_index(const Index& first, const Index& last, F&& f) {
   }
 }
 
+// The grid's origin [m], its lowest node.
+inline Vector grid_origin(const kern::GridGeom& g) {
+  Vector o;
+  for (int d = 0; d < kern::kDim; ++d) o[d] = g.lo[d];
+  return o;
+}
+
 // The period of each axis [m]: the grid's length along a periodic axis, 0 along the others.
 inline Vector periods(const kern::GridGeom& g) {
   Vector p{};

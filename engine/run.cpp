@@ -667,9 +667,7 @@ void RunOutputs::write_voids() {
     w.hi[kImpactAxis] = r.hi;
     win.push_back(w);
   }
-  Vector origin;
-  for (int d = 0; d < kDim; ++d) origin[d] = g.lo[d];
-  const auto a = open_area(sim_.particles(), b, win, pixel, kCoverRadius, periods(g), origin);
+  const auto a = open_area(sim_.particles(), b, win, pixel, kCoverRadius, periods(g), grid_origin(g));
   voids_.row(kVoidsColumns, VoidsRow{sim_.time(), "target", a[0], std::numeric_limits<double>::quiet_NaN()});
   for (std::size_t k = 0; k < scene_.regions.size(); ++k) {
     const auto& r = scene_.regions[k];

@@ -638,9 +638,7 @@ VoidSpec read_voids(CaseReader& v, const Scene& s, int ppc, const Box& box) {
 void cut_body_voids(CaseReader& r, const Scene& s, int ppc, const Box& box, Particles& P, BodyInfo& info) {
   CaseReader v = r.table("voids");
   const VoidSpec spec = read_voids(v, s, ppc, box);
-  Vector origin;
-  for (int a = 0; a < kDim; ++a) origin[a] = s.geom.lo[a];
-  const auto res = cut_voids(P, s.geom.h / ppc, origin, box, spec, periods(s.geom));
+  const auto res = cut_voids(P, s.geom.h / ppc, grid_origin(s.geom), box, spec, periods(s.geom));
   if (spec.porosity >= 0.0 && res.porosity < spec.porosity)
     throw CaseError("case key '" + v.path() + ".porosity': " + format_number(spec.porosity) + " not reached with " +
                     std::to_string(res.voids) + " voids (reached " + format_number(res.porosity) +

@@ -56,10 +56,6 @@ struct GridSink {
   inline void add_volume(std::size_t n, double vol) const { Add::add(G.vol[n], vol); }
 };
 
-// Largest tile width the scratch block is sized for (grid.tile_cells is checked against it). The
-// block lives on each thread's stack: K FMax (kMaxTile + 3)^D doubles, at most 69 kB at D = 2
-// and 340 kB at D = 3 with 8 cells (512 cells per tile); 16 cells at D = 3 would take 1.75 MB.
-inline constexpr int kMaxTile = kDim == 2 ? 16 : 8;
 // Nodes a tile's particles reach along an axis: cells c in [t0, t0 + tile) touch nodes c - 1 ..
 // c + 2 (every shape function here), so the block spans [t0 - 1, t0 + tile + 1]: tile + 3 nodes.
 inline constexpr int tile_span(int tile) { return tile + 3; }

@@ -51,6 +51,12 @@ struct NodeBox {
   }
 };
 
+// Largest tile width the colored scatter's scratch block (kernels/transfer.hpp) is sized for, and
+// the default (grid.tile_cells is checked against it). The block lives on each thread's stack:
+// K FMax (kMaxTile + 3)^D doubles, at most 69 kB at D = 2 and 340 kB at D = 3 with 8 cells (512
+// cells per tile); 16 cells at D = 3 would take 1.75 MB.
+inline constexpr int kMaxTile = kDim == 2 ? 16 : 8;
+
 // Uniform grid of cells of size h over kDim axes. Node i (one index per axis, 0 <= i_d <= n_d)
 // sits at lo_d + i_d h. Node storage carries `pad` ghost layers on every side so that stencils
 // of particles near the domain edge never need a bounds check; along a periodic axis the real
@@ -61,7 +67,7 @@ struct GridGeom {
   Idx<kDim> n = uniform<kDim>(1);  // cells per axis
   bool wrap[kDim] = {};    // periodic axes
   int pad = 2;             // ghost nodes per side (>= 2 serves every shape function here)
-  int tile = kDim == 2 ? 16 : 8;  // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
+  int tile = kMaxTile;     // tile width in cells (>= 4: the colored scatter needs tile > stencil reach)
 
   // per axis: cells, origin [m], periodicity, storage length (nodes with ghosts), storage stride
   int cells(int d) const { return n[d]; }

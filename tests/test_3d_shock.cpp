@@ -52,17 +52,15 @@ TEST_CASE("3D: a spherical void collapses and closes, energy conserved", "[verif
   const auto& g = sc.geom;
   const double pixel = 0.5 * g.h / 3;
   Window all;
-  Vector origin;
   for (int d = 0; d < 3; ++d) {
     all.lo[d] = d == kImpactAxis ? -1e300 : g.lo[d];
     all.hi[d] = d == kImpactAxis ? 1e300 : g.lo[d] + g.length(d);
-    origin[d] = g.lo[d];
   }
-  const double V0 = open_area(sc.particles, 0, {all}, pixel, kCoverRadius, periods(g), origin)[0];
+  const double V0 = open_area(sc.particles, 0, {all}, pixel, kCoverRadius, periods(g), grid_origin(g))[0];
   Simulation sim(g, sc.solver, sc.materials, sc.body_material, sc.particles);
   const double E0 = sim.energy().total();
   while (sim.time() < sc.run.end_time) sim.step(sc.run.end_time - sim.time());
-  const double V1 = open_area(sim.particles(), 0, {all}, pixel, kCoverRadius, periods(g), origin)[0];
+  const double V1 = open_area(sim.particles(), 0, {all}, pixel, kCoverRadius, periods(g), grid_origin(g))[0];
   const double lost = sim.removed_is_heat() ? 0.0 : sim.removed().wall + sim.removed().contact;
   const double residual = (sim.energy().total() + lost - E0) / E0;
   const double sphere = 4.0 / 3.0 * M_PI * std::pow(10e-6, 3);

@@ -199,11 +199,11 @@ TEST_CASE("single void collapse at h = 4 um: the faces close", "[verification][p
     const auto& g = sc.geom;
     const double pixel = 0.5 * g.h / 4;
     const std::vector<Window> all{Window{{g.lo[0], -1e300}, {g.lo[0] + g.length(0), 1e300}}};
-    const double A0 = open_area(sc.particles, 0, all, pixel, kCoverRadius, periods(g), Vector{{g.lo[0], g.lo[1]}})[0];
+    const double A0 = open_area(sc.particles, 0, all, pixel, kCoverRadius, periods(g), grid_origin(g))[0];
     Simulation sim(g, sc.solver, sc.materials, sc.body_material, sc.particles);
     const double E0 = sim.energy().total();
     while (sim.time() < 20e-9) sim.step(20e-9 - sim.time());
-    const double A = open_area(sim.particles(), 0, all, pixel, kCoverRadius, periods(g), Vector{{g.lo[0], g.lo[1]}})[0];
+    const double A = open_area(sim.particles(), 0, all, pixel, kCoverRadius, periods(g), grid_origin(g))[0];
     const double dE = sim.energy().total() / E0 - 1.0;
     WARN(mode << ": open area " << A / A0 << " of the initial, energy change " << dE);
     CHECK(A0 == Approx(M_PI * 9.5e-6 * 9.5e-6).epsilon(0.05));  // the disks reach 0.5 um into it
