@@ -1,5 +1,5 @@
-// Background grid storage: node arrays over the padded node range of kern::GridGeom, vector
-// quantities one array per axis, and the halo phase (the periodic fold and ghost fill) over
+// Background grid storage: node arrays over the padded node range of kern::GridGeom (and
+// kern::kLinePad doubles past it), vector quantities one array per axis, and the halo phase (the periodic fold and ghost fill) over
 // arrays named by NodeArray.
 #pragma once
 #include "kernels/dimension.hpp"
@@ -35,7 +35,7 @@ struct Grid {
   // holds one block per field; the mass gradients only with normals (two-body contact: a weld
   // of void faces needs none).
   Grid(const kern::GridGeom& g, bool flip, int nfields = 1, bool normals = true) : geom(g), fields(nfields) {
-    const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields);
+    const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields) + kern::kLinePad;
     m.assign(nn, 0.0);
     for (int d = 0; d < kern::kDim; ++d) {
       for (auto* a : {&p[d], &f[d], &v[d]}) a->assign(nn, 0.0);
@@ -47,7 +47,7 @@ struct Grid {
   }
   // The arrays of grid heat conduction, one field.
   void enable_heat() {
-    for (auto* a : {&cap, &capT, &T, &dT}) a->assign(geom.num_nodes(), 0.0);
+    for (auto* a : {&cap, &capT, &T, &dT}) a->assign(geom.num_nodes() + kern::kLinePad, 0.0);
   }
   kern::GridView view() {
     kern::GridView G{};

@@ -70,6 +70,35 @@ struct Stencil {
     }
     return s;
   }
+  // What a line of nodes along axis 0 shares (offsets a, a[0] = 0), for e >= 1 (entry 0 unused):
+  // the product c of the other axes' weights, that product with axis e's derivative in place of
+  // its weight ce[e], and the offsets off[e] = x_i,e - x_p,e.
+  struct LineWeights {
+    double c, ce[D], off[D];
+  };
+  // f(a, lw) for every line along axis 0, in storage order, not unrolled: the 3D transfers
+  // (kern::scatter_slots, kern::gather_sums_by_line) take a line's nodes as one vector.
+  template <class F>
+  SMPM_INLINE void for_each_line(F&& f) const {
+#pragma GCC unroll 1
+    for (int l = 0; l < Nodes / N; ++l) {
+      const Idx<D> a = digits(l * N);
+      LineWeights lw;
+      lw.c = 1.0;
+#pragma GCC unroll 3
+      for (int e = 1; e < D; ++e) {
+        lw.c *= w[e][a[e]];
+        lw.off[e] = (base[e] + a[e]) - xg[e];
+      }
+#pragma GCC unroll 3
+      for (int e = 1; e < D; ++e) {
+        lw.ce[e] = 1.0;
+#pragma GCC unroll 3
+        for (int f = 1; f < D; ++f) lw.ce[e] *= f == e ? dw[f][a[f]] : w[f][a[f]];
+      }
+      f(a, static_cast<const LineWeights&>(lw));
+    }
+  }
   // f(a, k) for every node, k its index in storage order
   template <class F>
   SMPM_INLINE void for_each(F&& f) const {

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "simd.hpp"
 #include "stencil.hpp"
 #include "views.hpp"
 
@@ -37,6 +38,7 @@ struct AtomicAdd {
 
 template <class Add>
 struct GridSink {
+  static constexpr bool kSlotVectors = false;
   const GridGeom& g;
   const GridView& G;
   std::size_t node(const Idx<kDim>& i) const { return g.node(i); }
@@ -71,8 +73,12 @@ struct Slot {
 };
 
 // K values per node (Slot); velocity fields follow each other, span^kDim nodes apart.
-template <int K>
+template <int KS>
 struct TileSink {
+  // 3D: a node's K values span whole 8-double vectors (p2g_colored pads K), added as vectors
+  // (scatter_slots)
+  static constexpr int K = KS;
+  static constexpr bool kSlotVectors = kDim == 3 && K % 8 == 0;
   double* s;
   Idx<kDim> lo;
   int span;
@@ -123,6 +129,91 @@ SMPM_INLINE Idx<kDim> node_of(const St& st, const Idx<kDim>& a) {
 #pragma GCC unroll 3
   for (int d = 0; d < kDim; ++d) i[d] = st.base[d] + a[d];
   return i;
+}
+
+
+// The 3D scatter of one point into a TileSink whose nodes hold whole vectors of values. Every
+// node value is a sum of (a scalar of the node) x (a vector of the point): the weight w times
+// A (mass, momentum, volume), w (x_i - x_p)_c times B_c (APIC's affine momentum), the gradient
+// g_c times F_c (force, mass gradient). With w = w_0(a_0) c(a_1..), the terms of the axes
+// e >= 1 are constant along a line of nodes and fold into three vectors per line, so node k of
+// a line takes three vector products, w_0[k] P1 + dw_0[k] P2 + w_0[k] (x_i - x_p)_0 P3, and
+// one vector add per 8 values into the block, instead of one scalar operation per value. The
+// same sums as p2g_particle's node loop up to rounding (grouped differently); each point's order
+// is fixed, so any thread count gives the same bits. Measured in docs/performance.md ("3D
+// transfers").
+template <class Shape, bool APIC, P2GWhat What, bool Contact, bool Normals, class Sink>
+SMPM_INLINE void scatter_slots(const Stencil<Shape, kDim>& st, const Sink& sink, std::size_t first, double m,
+                               const double* mv, const double (*mC)[kDim], const double (*vs)[kDim], double mh,
+                               double Vp) {
+  constexpr int D = kDim, N = Shape::N, K = Sink::K, V = K / 8;
+  static_assert(N <= 4, "a line holds at most 4 nodes");
+  Slots A[V] = {}, B[D][V] = {}, F[D][V] = {};  // the point's vectors: of w, w (x_i - x_p)_c, g_c
+  const auto set = [](Slots* v, int slot, double x) { v[slot / 8][slot % 8] = x; };
+#pragma GCC unroll 3
+  for (int d = 0; d < D; ++d) set(A, Slot::momentum + d, mv[d]);
+  if constexpr (APIC)
+#pragma GCC unroll 3
+    for (int c = 0; c < D; ++c)
+#pragma GCC unroll 3
+      for (int r = 0; r < D; ++r) set(B[c], Slot::momentum + r, mC[r][c]);
+  if constexpr (What == P2GWhat::All) {
+    set(A, Slot::mass, m);
+#pragma GCC unroll 3
+    for (int c = 0; c < D; ++c)
+#pragma GCC unroll 3
+      for (int r = 0; r < D; ++r) set(F[c], Slot::force + r, vs[r][c]);
+    if constexpr (Contact && Normals) {
+#pragma GCC unroll 3
+      for (int c = 0; c < D; ++c) set(F[c], Slot::contact + c, mh);
+      set(A, Slot::contact + D, Vp);
+    }
+    if constexpr (Contact && !Normals) set(A, Slot::contact, Vp);
+  }
+  // axis 0's weights w0, derivatives dw0 and w0 (x_i - x_p)_0 per node of a line; through
+  // memory, so that each node reads them by broadcast loads (load ports), not lane shuffles
+  alignas(32) double s0[3][4] = {};
+#pragma GCC unroll 4
+  for (int k = 0; k < N; ++k) {
+    s0[0][k] = st.w[0][k];
+    s0[1][k] = st.dw[0][k];
+    s0[2][k] = st.w[0][k] * ((st.base[0] + k) - st.xg[0]);
+  }
+  asm volatile("" : "+m"(s0));
+  st.for_each_line([&](const Idx<D>& a, const auto& lw) __attribute__((always_inline)) {
+    double* const line = sink.s + K * node_index(sink, first, a);
+    const double c = lw.c;
+    // node k of the line takes w0[k] P1 + dw0[k] P2 + w0[k] (x_i - x_p)_0 P3: the terms of axes
+    // e >= 1, constant along the line, folded into the line's vectors
+    Slots P1[V], P2[V], P3[V];
+#pragma GCC unroll 2
+    for (int v = 0; v < V; ++v) {
+      Slots t = A[v];
+      if constexpr (APIC)
+#pragma GCC unroll 3
+        for (int e = 1; e < D; ++e) t = madd(lw.off[e], B[e][v], t);
+      P1[v] = c * t;
+      if constexpr (What == P2GWhat::All) {
+#pragma GCC unroll 3
+        for (int e = 1; e < D; ++e) P1[v] = madd(lw.ce[e], F[e][v], P1[v]);
+        P2[v] = c * F[0][v];
+      }
+      if constexpr (APIC) P3[v] = c * B[0][v];
+    }
+#pragma GCC unroll 4
+    for (int k = 0; k < N; ++k) {
+      double* const s = line + K * k;
+#pragma GCC unroll 2
+      for (int v = 0; v < V; ++v) {
+        Slots y;
+        __builtin_memcpy(&y, s + 8 * v, sizeof y);
+        y = madd(s0[0][k], P1[v], y);
+        if constexpr (What == P2GWhat::All) y = madd(s0[1][k], P2[v], y);
+        if constexpr (APIC) y = madd(s0[2][k], P3[v], y);
+        __builtin_memcpy(s + 8 * v, &y, sizeof y);
+      }
+    }
+  });
 }
 
 // Scatter of one particle p into its velocity field. APIC adds the affine momentum
@@ -194,11 +285,13 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
       if constexpr (Contact && !Normals) sink.add_volume(n, w * Vp);
     }
   };
-  // one field: by lines, the fewest instructions on node addresses; several fields: fully
-  // unrolled, which measures faster there (docs/performance.md, "What was tried")
-  if constexpr (Contact) st.for_each(node);
+  // 3D: a node's values as vectors (scatter_slots); one field: by lines, the fewest
+  // instructions on node addresses; several fields: fully unrolled, which measures faster there
+  // (docs/performance.md, "What was tried")
+  if constexpr (Sink::kSlotVectors)
+    scatter_slots<Shape, APIC, What, Contact, Normals>(st, sink, first, m, mv, mC, vs, mh, Vp);
+  else if constexpr (Contact) st.for_each(node);
   else st.for_each_by_line(node);
-
 }
 
 // Scatter of the particles at sorted positions [s0, s1) into a sink.
@@ -343,7 +436,9 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  constexpr int K = Slot::count(Contact, Normals), FMax = Contact ? (Normals ? 2 : 4) : 1;
+  // 3D: whole vectors of 8 values per node (scatter_slots), one cache line for 7 or 8 values
+  constexpr int K0 = Slot::count(Contact, Normals), K = kDim == 3 ? (K0 + 7) / 8 * 8 : K0;
+  constexpr int FMax = Contact ? (Normals ? 2 : 4) : 1;
   const int F = Contact ? G.fields : 1;
   for_each_tile_colored<K, FMax>(
       g, cell_start,
@@ -539,8 +634,118 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
         for (int c = 0; c < D; ++c) S.B[r][c] += w * gv[r] * st.offset(a, c);
     }
   };
-  if constexpr (D == 3) st.for_each_by_line(node);
-  else st.for_each(node);
+  st.for_each(node);
+  return S;
+}
+
+
+
+// gather_sums by lines (the 3D gather): the stencil's weight is the product w_0(a_0) c(a_1..),
+// so every sum over the nodes is a sum over the lines along axis 0 of (the line's cross weight
+// c) x (the line's node values, a vector over a_0), contracted with the 1D weights of axis 0 at
+// the end: S_v = sum_k w_0[k] (sum_lines c_line v_line)[k]. The line values load as one vector
+// (contiguous nodes), each sum takes one multiply and one add per line and component instead of
+// per node, and the weight products are formed once per line. The same sums as gather_sums up
+// to rounding (grouped differently; tests/test_kernels.cpp compares them); each point's order is
+// fixed, so any thread count gives the same bits. Measured against the node-by-node loop in
+// docs/performance.md ("3D gather").
+template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip, bool WorkRate>
+SMPM_INLINE GatherSums gather_sums_by_line(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st,
+                                           std::size_t foff, double mid, const Vec<kDim> u, const Mat<kDim> uC) {
+  constexpr int D = kDim, N = Shape::N;
+  static_assert(N <= 4, "a line holds at most 4 nodes");
+  constexpr bool kAffine = !FLIP && What != G2PWhat::PositionGradient;
+  constexpr bool kGrad = What != G2PWhat::Velocity || (kAffine && Shape::apic_gradient);
+  constexpr bool kB = kAffine && !Shape::apic_gradient;
+  constexpr bool kDv = FLIP && What != G2PWhat::PositionGradient;
+  constexpr bool kQc = Heat && (FLIP ? Contact != 0 : Contact == 2);
+  Line w0 = {}, dw0 = {}, o0 = {};  // axis 0: weights, derivatives, offsets x_i - x_p
+#pragma GCC unroll 4
+  for (int k = 0; k < N; ++k) {
+    w0[k] = st.w[0][k];
+    dw0[k] = st.dw[0][k];
+    o0[k] = (st.base[0] + k) - st.xg[0];
+  }
+  // per component r: sum_lines c v_r (Av), c_e v_r with c_e the cross weight with the
+  // derivative on axis e >= 1 (Ag), c off_e v_r (Ab); Aw.. the same of the work-rate velocity
+  Line Av[D] = {}, Ag[D][D] = {}, Ab[D][D] = {}, Awv[D] = {}, Awg[D][D] = {}, Adv[D] = {};
+  Line Ae2 = {}, Ad2 = {}, Aqc = {};  // heat: sum w (|v_i|^2 + |r_i|^2) (the two always add), FLIP's d2, qc
+  Line M0[D];  // C h (x_i - x_p)_0 along a line, per component
+#pragma GCC unroll 3
+  for (int d = 0; d < D; ++d) M0[d] = uC(d, 0) * o0;
+  const std::size_t first = g.node(node_of(st, Idx<D>{})) + foff;
+  st.for_each_line([&](const Idx<D>& a, const auto& lw) __attribute__((always_inline)) {
+    const std::size_t n = node_index(g, first, a);
+    const double c = lw.c;
+    Line gv[D], e2 = {}, d2 = {};
+#pragma GCC unroll 3
+    for (int d = 0; d < D; ++d) {
+      gv[d] = PureFlip ? Line{} : load_line<N>(G.v[d] + n);
+      if constexpr (!PureFlip) Av[d] = madd(c, gv[d], Av[d]);
+      if constexpr (kGrad)
+#pragma GCC unroll 3
+        for (int e = 1; e < D; ++e) Ag[e][d] = madd(lw.ce[e], gv[d], Ag[e][d]);
+      if constexpr (kB)
+#pragma GCC unroll 3
+        for (int e = 1; e < D; ++e) Ab[e][d] = madd(c * lw.off[e], gv[d], Ab[e][d]);
+      Line dn = {};
+      if constexpr (kDv || (Heat && FLIP) || (WorkRate && FLIP)) dn = load_line<N>(G.dv[d] + n);
+      if constexpr (kDv) Adv[d] = madd(c, dn, Adv[d]);
+      if constexpr (WorkRate) {
+        // the mid-step velocity, as gather_sums
+        Line lv;
+        if constexpr (FLIP) lv = madd(-mid, dn, gv[d]);
+        else lv = madd(-mid, gv[d] - load_line<N>(G.p[d] + n), gv[d]);
+        Awv[d] = madd(c, lv, Awv[d]);
+#pragma GCC unroll 3
+        for (int e = 1; e < D; ++e) Awg[e][d] = madd(lw.ce[e], lv, Awg[e][d]);
+      }
+      if constexpr (Heat) {
+        Line r;
+        if constexpr (FLIP) {
+          r = u[d] - gv[d] + dn;
+          d2 = madd(dn, dn, d2);
+        } else {
+          double rb = u[d];
+#pragma GCC unroll 3
+          for (int e = 1; e < D; ++e) rb += uC(d, e) * lw.off[e];
+          r = (rb + M0[d]) - load_line<N>(G.p[d] + n);
+        }
+        e2 = madd(r, r, madd(gv[d], gv[d], e2));
+      }
+    }
+    if constexpr (Heat) {
+      Ae2 = madd(c, e2, Ae2);
+      if constexpr (FLIP) Ad2 = madd(c, d2, Ad2);
+      if constexpr (kQc) Aqc = madd(c, load_line<N>(G.heat + n), Aqc);
+    }
+  });
+  GatherSums S;
+#pragma GCC unroll 3
+  for (int d = 0; d < D; ++d) {
+    if constexpr (!PureFlip) S.v[d] = lane_sum(Av[d] * w0);
+    if constexpr (kDv) S.dv[d] = lane_sum(Adv[d] * w0);
+    if constexpr (kGrad) {
+      S.L[d][0] = lane_sum(Av[d] * dw0);
+#pragma GCC unroll 3
+      for (int e = 1; e < D; ++e) S.L[d][e] = lane_sum(Ag[e][d] * w0);
+    }
+    if constexpr (WorkRate) {
+      S.W[d][0] = lane_sum(Awv[d] * dw0);
+#pragma GCC unroll 3
+      for (int e = 1; e < D; ++e) S.W[d][e] = lane_sum(Awg[e][d] * w0);
+    }
+    if constexpr (kB) {
+      S.B[d][0] = lane_sum(Av[d] * (w0 * o0));
+#pragma GCC unroll 3
+      for (int e = 1; e < D; ++e) S.B[d][e] = lane_sum(Ab[e][d] * w0);
+    }
+  }
+  if constexpr (Heat) {
+    S.v2 = lane_sum(Ae2 * w0);  // S.r2 stays 0: g2p_particle reads S.r2 + S.v2
+    if constexpr (FLIP) S.d2 = lane_sum(Ad2 * w0);
+    if constexpr (kQc) S.qc = lane_sum(Aqc * w0);
+  }
   return S;
 }
 
@@ -623,7 +828,11 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
   // with Contact the view always carries field_of (Simulation::pview): the lookup without
   // field()'s null test vectorizes
   const std::size_t foff = Contact ? static_cast<std::size_t>(P.field_of[p]) * G.fstride : 0;
-  const GatherSums S = gather_sums<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC);
+  GatherSums S;
+  if constexpr (D == 3)
+    S = gather_sums_by_line<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC);
+  else
+    S = gather_sums<Shape, FLIP, What, Heat, Contact, PureFlip, WorkRate>(g, G, st, foff, q.mid, u, uC);
   double Dn[D] = {}, C[D][D] = {}, affine = 0.0;  // inertia, C (grid units), affine energy
   if constexpr (kAffine) {
     if constexpr (!Shape::apic_gradient || Heat)
@@ -696,9 +905,15 @@ void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::
     const ParticleView Pl = P;
     const G2PParams ql = q;
     const Gradient Ll = Gradient::of(P);
+    if constexpr (kDim == 2) {
 #pragma omp for simd schedule(static)
-    for (std::size_t p = 0; p < n; ++p)
-      g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql, Ll, p);
+      for (std::size_t p = 0; p < n; ++p)
+        g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql, Ll, p);
+    } else {  // one point at a time, its lines as vectors (gather_sums_by_line)
+#pragma omp for schedule(static)
+      for (std::size_t p = 0; p < n; ++p)
+        g2p_particle<Shape, FLIP, What, Heat, Contact, PureFlip>(gl, Gl, Pl, p, ql, Ll, p);
+    }
   }
 }
 
@@ -756,9 +971,9 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
           for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
       if constexpr (kWork)
         for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
-      // 2D: vectorized across points; 3D: one point at a time, its 27-node stencil walked line by
-      // line (for_each_by_line): the vectorized 3D gather (gather instructions for 27 nodes, 21
-      // sums per point) ran the dense 3D bench 13 % slower than this (docs/performance.md)
+      // 2D: vectorized across points; 3D: one point at a time, each line of its stencil one
+      // vector (gather_sums_by_line; the 3D gather vectorized across points, by gather
+      // instructions for 27 nodes, was slower: docs/performance.md)
       if constexpr (kDim == 2) {
 #pragma omp simd
         for (std::size_t p = first; p < last; ++p)

@@ -14,6 +14,7 @@
 #include "kernels/shape.hpp"
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
+#include "tests/bins.hpp"
 
 using namespace smpm;
 using namespace smpm::kern;
@@ -92,21 +93,8 @@ Particles random_particles(const GridGeom& g, std::size_t n, unsigned seed) {
   return P;
 }
 
-struct Bins {
-  std::vector<std::uint32_t> key, order, start, hist;
-};
-
-Bins bin(const GridGeom& g, const Particles& P) {
-  Bins b;
-  const std::size_t n = P.size();
-  b.key.resize(n);
-  b.order.resize(n);
-  b.start.resize(g.num_keys() + 1);
-  b.hist.resize(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
-  REQUIRE(compute_keys(g, xy(P.x[0].data(), P.x[1].data()).data(), n, b.key.data()) == -1);
-  counting_sort(b.key.data(), n, g.num_keys(), b.hist.data(), b.start.data(), b.order.data());
-  return b;
-}
+using test::Bins;
+using test::bin;
 
 // A step's grid for the gather tests: P scattered (APIC or not) and the grid updated with dt
 // (FLIP: its increments too), over all nodes
