@@ -125,8 +125,9 @@ struct GridGeom {
 // are one array per axis.
 // Doubles every node array holds past its last node (engine/grid.hpp): the 3D gather loads a
 // line of up to 4 nodes as one 4-double vector and masks the lanes past the stencil
-// (kern::load_line), which reads up to 3 doubles past a line that ends the array.
-inline constexpr std::size_t kLinePad = 4;
+// (kern::load_line), which reads up to 3 doubles past a line that ends the array. 2D reads
+// none.
+inline constexpr std::size_t kLinePad = kDim == 3 ? 4 : 0;
 
 struct GridView {
   double* m;              // mass [kg/m]
