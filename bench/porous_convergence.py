@@ -253,6 +253,10 @@ def main():
                     help="exit 1 unless the first (coarsest) run meets the figures one run must show: "
                          "open porosity under 2 %%, under 5 %% of the band at zero pressure, front within 5 %% "
                          "of the fully compacted Rankine-Hugoniot front, energy within 1e-8")
+    ap.add_argument("--check-trend", action="store_true",
+                    help="exit 1 unless, from each cell size to the next finer one, the front's distance to the "
+                         "compacted Hugoniot at the swept porosity and the open porosity both shrink, and every "
+                         "run's energy is within 1e-8 (the quick form where one run cannot meet --check)")
     a = ap.parse_args()
     hs = [float(x) for x in a.h.split(",")]
     window = [float(x) for x in a.window.split(",")]
@@ -307,6 +311,24 @@ def main():
         for name, v, ok, bound in checks:
             print(f"check h = {r['h_um']:g} um: {name} {v:.4g} ({bound}): {'ok' if ok else 'FAILED'}")
         if bad:
+            sys.exit(1)
+    if a.check_trend:
+        ok = len(rows) == len(hs) and len(rows) >= 2
+        if not ok:
+            print("check trend: a run is missing: FAILED")
+        for r in rows:
+            good = abs(r["energy"]) < 1e-8
+            ok &= good
+            print(f"check h = {r['h_um']:g} um: energy change {r['energy']:.3g} (within 1e-8): {'ok' if good else 'FAILED'}")
+        for r0, r1 in zip(rows, rows[1:]):
+            for name, v0, v1 in (("|front / swept Hugoniot front - 1|", abs(r0["front"] / r0["swept_rh"] - 1),
+                                  abs(r1["front"] / r1["swept_rh"] - 1)),
+                                 ("|open porosity|", abs(r0["open"]), abs(r1["open"]))):
+                good = v1 < v0
+                ok &= good
+                print(f"check h = {r0['h_um']:g} -> {r1['h_um']:g} um: {name} {v0:.4g} -> {v1:.4g} (shrinks): "
+                      f"{'ok' if good else 'FAILED'}")
+        if not ok:
             sys.exit(1)
 
 
