@@ -2,6 +2,7 @@
 #include "engine/diagnostics.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -170,7 +171,9 @@ struct Raster {
 };
 
 // Marks the pixels whose centre lies in a body point's disk (ball), radius * point_size(V_p)
-// capped at rmax.
+// capped at rmax. The points run in parallel: disks overlap, and a pixel two threads mark gets
+// the same 1 from both (relaxed atomic byte stores), so the image is the same for any thread
+// count.
 void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
   // the raster's geometry in locals: a store into the image (bytes) could alias the members
   const Vector lo = R.lo, step = R.step;
@@ -178,7 +181,9 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
   bool wrap[kDim];
   for (int d = 0; d < kDim; ++d) wrap[d] = R.wrap[d];
   std::uint8_t* img = R.img.data();
-  for (std::size_t p = 0; p < P.size(); ++p) {
+  const auto np = static_cast<std::ptrdiff_t>(P.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t p = 0; p < np; ++p) {
     if (P.body[p] != body) continue;
     const double rad = std::min(radius * point_size(P.V[p]), rmax), r2 = rad * rad;
     Vector c;
@@ -197,9 +202,12 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
       for (int d = 0; d < kDim; ++d) e[d] = lo[d] + (i[d] + 0.5) * step[d] - c[d];
       if (kern::norm2(e) > r2) return;
       Index w = i;
-      for (int d = 0; d < kDim; ++d)
-        if (wrap[d]) w[d] = ((w[d] % n[d]) + n[d]) % n[d];
-      img[linear_index(w, n)] = 1;
+      for (int d = 0; d < kDim; ++d)  // into the period by steps: no integer division
+        if (wrap[d]) {
+          while (w[d] < 0) w[d] += n[d];
+          while (w[d] >= n[d]) w[d] -= n[d];
+        }
+      std::atomic_ref<std::uint8_t>(img[linear_index(w, n)]).store(1, std::memory_order_relaxed);
     });
   }
 }
