@@ -6,7 +6,8 @@
 # 10 um apart in z, the 3D energy.csv columns), run the script on them and check that every
 # expected PNG exists and is non-empty, that a figure whose inputs are missing is skipped, that the
 # 3D maps take one layer of points about the mid-plane, and the exit statuses (0 written, 1
-# nothing made, 2 bad arguments). series.csv's columns are the engine's own: the headers of
+# nothing made, 2 bad arguments); then scripts/hot_spots.py on the 3D run (the band's target
+# points counted, none above 1500 K). series.csv's columns are the engine's own: the headers of
 # series.csv and the 2D energy.csv are read from a one-step run of the driver on the quick-start
 # case; the 3D energy.csv header is that of a run of cases/quickstart3d.toml.
 #
@@ -254,6 +255,24 @@ set +e  # the y-z plane
 set -e
 [ "$rc" = 0 ] || { echo "figures.py (3D, --slice-axis x) exited $rc, expected 0" >&2; fail=1; }
 check "$C"/{map_P,map_T,velocity_field}.png
+
+echo "== hot_spots.py on the synthetic 3D run"
+# the band's target points (the impactor's 9999 K points are not the target's): count and shares
+"$PY" - "$TMP/c" "$ROOT/scripts/hot_spots.py" <<'EOF2' || fail=1
+import glob, os, subprocess, sys
+import h5py, numpy as np
+out, script = sys.argv[1], sys.argv[2]
+row = subprocess.run([sys.executable, script, out, "--time-ns", "500", "--band-um", "0", "100"], check=True,
+                     capture_output=True, text=True).stdout.strip().splitlines()[-1].split("|")
+with h5py.File(os.path.join(out, "fields", "snap_00000500.h5"), "r") as f:
+    p = f["particles"]
+    y = p["position"][:, 1] * 1e6
+    n = int(np.sum((p["body"][...] == 0) & (y >= 0) & (y < 100)))
+cells = [c.strip() for c in row[1:-1]]
+ok = cells[1] == "500" and int(cells[2]) == n and cells[-2] == "0.0 %" and 300 <= float(cells[3]) <= 1000
+print(("ok  " if ok else "BAD ") + f" hot_spots: {' | '.join(cells)} (band points {n})")
+sys.exit(0 if ok else 1)
+EOF2
 
 echo "== exit statuses"
 set +e
