@@ -109,7 +109,7 @@ def matrix(kind):
                             runs.append(("dense", case, {"grid.cell_size_um": h, "solver.shape": shape,
                                                          "solver.transfer": transfer, "solver.scheme": scheme,
                                                          "bodies.target.points_per_cell": ppc}))
-    # the 3D strip (spherical voids, four void-face fields), at the defaults
+    # the 3D strip (spherical voids), at the defaults (two void-face fields)
     for h in (5.0, 4.0, 3.125):
         runs.append(("porous3d", "porous_strip_3d.toml", {"grid.cell_size_um": h}))
     if kind == "porous3d":
