@@ -570,7 +570,8 @@ SMPM_INLINE void store_gradient(const GatherSums& S, double inv_h, const Gradien
   }
 }
 
-// The node loop of g2p_particle: every sum its template arguments ask for, node by node in
+// The node loop of g2p_particle in 2D (3D: gather_sums_by_line; tests/test_3d_kernels.cpp holds
+// the two equal): every sum its template arguments ask for, node by node in
 // storage order. u, uC: the point's old velocity and C h (the heating gather's scatter loss).
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip, bool WorkRate>
 SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st,
