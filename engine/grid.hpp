@@ -1,6 +1,6 @@
-// Background grid storage: node arrays over the padded node range of kern::GridGeom (and
-// kern::kLinePad doubles past it), vector quantities one array per axis, and the halo phase (the periodic fold and ghost fill) over
-// arrays named by NodeArray.
+// Background grid storage: node arrays over the padded node range of kern::GridGeom (the
+// velocity fields' arrays kern::kLinePad doubles longer), vector quantities one array per axis,
+// and the halo phase (the periodic fold and ghost fill) over arrays named by NodeArray.
 #pragma once
 #include "kernels/dimension.hpp"
 #include <array>
@@ -47,7 +47,7 @@ struct Grid {
   }
   // The arrays of grid heat conduction, one field.
   void enable_heat() {
-    for (auto* a : {&cap, &capT, &T, &dT}) a->assign(geom.num_nodes() + kern::kLinePad, 0.0);
+    for (auto* a : {&cap, &capT, &T, &dT}) a->assign(geom.num_nodes(), 0.0);
   }
   kern::GridView view() {
     kern::GridView G{};

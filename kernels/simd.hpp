@@ -7,7 +7,6 @@
 // with and without FMA differ in the last bits of the 3D transfers.
 #pragma once
 #include "dimension.hpp"
-#include <cstddef>
 
 #include "tensor.hpp"
 

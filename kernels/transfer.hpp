@@ -131,7 +131,6 @@ SMPM_INLINE Idx<kDim> node_of(const St& st, const Idx<kDim>& a) {
   return i;
 }
 
-
 // The 3D scatter of one point into a TileSink whose nodes hold whole vectors of values. Every
 // node value is a sum of (a scalar of the node) x (a vector of the point): the weight w times
 // A (mass, momentum, volume), w (x_i - x_p)_c times B_c (APIC's affine momentum), the gradient
@@ -139,9 +138,9 @@ SMPM_INLINE Idx<kDim> node_of(const St& st, const Idx<kDim>& a) {
 // e >= 1 are constant along a line of nodes and fold into three vectors per line, so node k of
 // a line takes three vector products, w_0[k] P1 + dw_0[k] P2 + w_0[k] (x_i - x_p)_0 P3, and
 // one vector add per 8 values into the block, instead of one scalar operation per value. The
-// same sums as p2g_particle's node loop up to rounding (grouped differently); each point's order
-// is fixed, so any thread count gives the same bits. Measured in docs/performance.md ("3D
-// transfers").
+// same sums as p2g_particle's node loop up to rounding (grouped differently;
+// tests/test_3d_kernels.cpp compares them); each point's order is fixed, so any thread count
+// gives the same bits. Measured in docs/performance.md ("3D").
 template <class Shape, bool APIC, P2GWhat What, bool Contact, bool Normals, class Sink>
 SMPM_INLINE void scatter_slots(const Stencil<Shape, kDim>& st, const Sink& sink, std::size_t first, double m,
                                const double* mv, const double (*mC)[kDim], const double (*vs)[kDim], double mh,
@@ -639,17 +638,15 @@ SMPM_INLINE GatherSums gather_sums(const GridGeom& g, const GridView& G, const S
   return S;
 }
 
-
-
 // gather_sums by lines (the 3D gather): the stencil's weight is the product w_0(a_0) c(a_1..),
 // so every sum over the nodes is a sum over the lines along axis 0 of (the line's cross weight
 // c) x (the line's node values, a vector over a_0), contracted with the 1D weights of axis 0 at
 // the end: S_v = sum_k w_0[k] (sum_lines c_line v_line)[k]. The line values load as one vector
 // (contiguous nodes), each sum takes one multiply and one add per line and component instead of
 // per node, and the weight products are formed once per line. The same sums as gather_sums up
-// to rounding (grouped differently; tests/test_kernels.cpp compares them); each point's order is
-// fixed, so any thread count gives the same bits. Measured against the node-by-node loop in
-// docs/performance.md ("3D gather").
+// to rounding (grouped differently; tests/test_3d_kernels.cpp compares them); each point's order
+// is fixed, so any thread count gives the same bits. Measured against the node-by-node loop in
+// docs/performance.md ("3D").
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip, bool WorkRate>
 SMPM_INLINE GatherSums gather_sums_by_line(const GridGeom& g, const GridView& G, const Stencil<Shape, kDim>& st,
                                            std::size_t foff, double mid, const Vec<kDim> u, const Mat<kDim> uC) {

@@ -120,15 +120,15 @@ struct GridGeom {
 };
 
 
+// Doubles each array of the velocity fields holds past its last node (engine/grid.hpp): the 3D
+// gather loads a line of up to 4 nodes as one 4-double vector and masks the lanes past the
+// stencil (kern::load_line), which reads up to 3 doubles past a line that ends the array. 2D
+// reads none.
+inline constexpr std::size_t kLinePad = kDim == 3 ? 4 : 0;
+
 // With multi-body contact every array holds one block of num_nodes() values per velocity field
 // (field f of node n at n + f * fstride); fstride is 0 with a single field. Vector quantities
 // are one array per axis.
-// Doubles every node array holds past its last node (engine/grid.hpp): the 3D gather loads a
-// line of up to 4 nodes as one 4-double vector and masks the lanes past the stencil
-// (kern::load_line), which reads up to 3 doubles past a line that ends the array. 2D reads
-// none.
-inline constexpr std::size_t kLinePad = kDim == 3 ? 4 : 0;
-
 struct GridView {
   double* m;              // mass [kg/m]
   double* p[kDim];        // momentum [kg m/s per m]; after the grid update with scatter_velocity, p / m

@@ -16,17 +16,14 @@
 #include "engine/scene.hpp"
 #include "engine/simulation.hpp"
 #include "tests/particle_checks.hpp"
+#include "tests/verify_cases.hpp"
 
 using namespace smpm;
 static_assert(kern::kDim == 3, "tests/test_3d.cpp is compiled for the 3D engine (SMPM_DIM=3)");
 
 namespace {
 
-Scene verify_scene(const std::string& file, const std::vector<std::string>& overrides = {}) {
-  auto doc = parse_case_file(std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify/" + file);
-  apply_overrides(doc, overrides);
-  return build_scene(doc, file, std::string(SHOCKMPM_SOURCE_DIR) + "/cases/verify");
-}
+using test::verify_scene;
 
 // Every array of the particles, by the checkpoint's names.
 const std::initializer_list<const char*> kAllArrays = {"x",   "y",   "z",   "vx",  "vy",  "vz",  "m",   "V",

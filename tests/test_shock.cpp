@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "tests/column_impact.hpp"
+#include "tests/verify_cases.hpp"
 
 using namespace smpm;
 
@@ -22,12 +23,7 @@ void check_plateau(const ImpactResult& r) {
   WARN("Us " << r.Us << " (exact " << r.exact_Us << "), wall " << r.wall << " P " << r.P << " (exact " << r.exact_P
              << "), rho " << r.rho << " (exact " << r.exact_rho << "), T " << r.T << " (exact " << r.exact_T
              << "), energy error " << r.energy_error);
-  CHECK(r.finite);
-  CHECK(r.Us == Approx(r.exact_Us).epsilon(0.02));
-  CHECK(r.wall == Approx(r.exact_P).epsilon(0.02));
-  CHECK(r.P == Approx(r.exact_P).epsilon(0.02));
-  CHECK(r.rho == Approx(r.exact_rho).epsilon(0.01));
-  CHECK(r.T == Approx(r.exact_T).epsilon(0.05));
+  test::check_plateau(r, 0.02);
 }
 
 }  // namespace
