@@ -183,7 +183,7 @@ int main(int argc, char** argv) {
     smpm::Simulation sim(scene.geom, scene.solver, scene.materials, scene.body_material,
                          std::move(scene.particles));
     const double n = static_cast<double>(sim.particles().size());
-    sim.store_gradient(false);  // as in a run between its statistics (shockmpm run stores L for those steps only)
+    sim.store_gradient(false);  // as in a run between its statistics (shockmpm run stores the gradient measures for those steps only)
     for (long s = 0; s < warmup; ++s) sim.step();
     const std::size_t T = threads.size();
     // per thread count, per phase: seconds of each round

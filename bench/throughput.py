@@ -96,7 +96,7 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
     if phase == "g2p":
         # reads x, y; writes x, y, v, C; heat: reads v, C, e too, and the scatter velocity
         # (px, py hold p / m after the grid update). L stays in the gather's block buffer
-        # (kern::g2p_blocks; stored on the particles only for the steps the statistics read)
+        # (kern::g2p_blocks; only its three measures are stored, for the steps the statistics read)
         b = 2 * 16 + 2 * (8 if (heat or flip) else 16)  # x y rw, v
         b += rw("Cxx", "Cxy", "Cyx", "Cyy") if heat else 16 * 4 * apic
         if heat:

@@ -96,12 +96,26 @@ static double solid_volume(const Particles& P, std::size_t i, const Material& ma
   return rho_zp > 0.0 ? std::min(P.V[i], P.m[i] / rho_zp) : P.V[i];
 }
 
-// The velocity gradient L of point i [1/s].
-static kern::Mat<kern::kDim> velocity_gradient(const Particles& P, std::size_t i) {
-  kern::Mat<kern::kDim> L;
-  for (int r = 0; r < kern::kDim; ++r)
-    for (int c = 0; c < kern::kDim; ++c) L(r, c) = P.grad(r, c)[i];
-  return L;
+void store_gradient_measures(const kern::Gradient& L, std::size_t first, std::size_t last, Particles& P) {
+  constexpr int D = kern::kDim;
+  for (std::size_t i = first; i < last; ++i) {
+    kern::Mat<D> g;
+    for (int r = 0; r < D; ++r)
+      for (int c = 0; c < D; ++c) g(r, c) = L.at(r, c)[i - first];
+    const kern::Sym<D> s = kern::sym_part(g);
+    double curl2 = 0.0;
+    for (int k = D; k < kern::Sym<D>::K; ++k) {
+      const int a = kern::sym_row(D, k), b = kern::sym_col(D, k);
+      const double c = g(b, a) - g(a, b);
+      curl2 = k == D ? c * c : curl2 + c * c;
+    }
+    double S2 = s[0] * s[0];
+    for (int k = 1; k < D; ++k) S2 += s[k] * s[k];
+    for (int k = D; k < kern::Sym<D>::K; ++k) S2 += 2.0 * s[k] * s[k];
+    P.curl2[i] = curl2;
+    P.div[i] = g.trace();
+    P.rate2[i] = S2;
+  }
 }
 
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
@@ -120,12 +134,13 @@ std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Regi
       T[r].push_back(particle_temperature(P, i, thermo[k], materials[k]));
       rho[r].push_back(P.m[i] / P.V[i]);
       u[r].push_back(P.v[kImpactAxis][i]);
-      const auto gm = gradient_measures(velocity_gradient(P, i));
-      out[r].R2 += gm.R2;
-      out[r].D2 += gm.D2;
-      out[r].S2 += gm.S2;
-      out[r].R += gm.R;
-      out[r].D += gm.D;
+      // |curl v| = sqrt(fl(c^2)) is |c| exactly at D = 2 (a correctly rounded square root of a
+      // correctly rounded square, no underflow)
+      out[r].R2 += P.curl2[i];
+      out[r].D2 += P.div[i] * P.div[i];
+      out[r].S2 += P.rate2[i];
+      out[r].R += std::sqrt(P.curl2[i]);
+      out[r].D += std::fabs(P.div[i]);
       out[r].open += solid_volume(P, i, materials[k]);
     }
   }

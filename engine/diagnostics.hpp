@@ -63,30 +63,12 @@ struct Moments {
 Moments moments(const std::vector<double>& v);
 
 // The study's local velocity-gradient measures of one particle, from the D x D gradient
-// L = grad v [1/s]: R = |curl v|, the components L_ba - L_ab (a < b) of curl v (D = 2: its one
-// component L_yx - L_xy, R its magnitude), D = |div v| = |tr L|, S^2 = D:D with D = sym(L) the
-// strain-rate tensor (plane strain at D = 2: D_zz = 0).
-struct GradientMeasures {
-  double R2, D2, S2;  // [1/s^2]
-  double R, D;        // |curl v|, |div v| [1/s]
-};
-template <int D>
-GradientMeasures gradient_measures(const kern::Mat<D>& L) {
-  const kern::Sym<D> s = kern::sym_part(L);
-  double curl[kern::spin_size(D) > 0 ? kern::spin_size(D) : 1] = {};
-  for (int k = D; k < kern::Sym<D>::K; ++k) {
-    const int a = kern::sym_row(D, k), b = kern::sym_col(D, k);
-    curl[k - D] = L(b, a) - L(a, b);
-  }
-  double R2 = curl[0] * curl[0];
-  for (int k = 1; k < kern::spin_size(D); ++k) R2 += curl[k] * curl[k];
-  double S2 = s[0] * s[0];
-  for (int k = 1; k < D; ++k) S2 += s[k] * s[k];
-  for (int k = D; k < kern::Sym<D>::K; ++k) S2 += 2.0 * s[k] * s[k];
-  const double div = L.trace();
-  const double R = kern::spin_size(D) == 1 ? std::fabs(curl[0]) : std::sqrt(R2);
-  return {R2, div * div, S2, R, std::fabs(div)};
-}
+// L = grad v [1/s]: |curl v|^2, the sum of the squares of the components L_ba - L_ab (a < b) of
+// curl v (D = 2: its one component L_yx - L_xy); div v = tr L; S^2 = D:D with D = sym(L) the
+// strain-rate tensor (plane strain at D = 2: D_zz = 0). Stored on points first + i of P
+// (Particles::curl2, div, rate2) for the gradient of a block of points, L.at(r, c)[i] (the
+// last gather pass's block buffer, kern::g2p_blocks), i < last - first.
+void store_gradient_measures(const kern::Gradient& L, std::size_t first, std::size_t last, Particles& P);
 
 // A band across the full width, from lo to hi along the impact axis [m], in one body.
 struct Region {
@@ -111,7 +93,8 @@ struct RegionStats {
   // expansion is crack, diagnostics.cpp); negative where points overlap
   double open = 0;
 };
-// gradient_current: the particles' L belongs to their current state (Simulation::gradient_current);
+// gradient_current: the particles' gradient measures belong to their current state
+// (Simulation::gradient_current);
 // if not (the last row of an interrupted or failed run), R2, D2 and S2 are NaN, not stale values.
 std::vector<RegionStats> region_stats(const Particles& P, const std::vector<Region>& regions,
                                       const std::vector<Thermo>& thermo, const std::vector<Material>& materials,

@@ -33,7 +33,8 @@ struct Grid {
   Grid() = default;
   // nfields > 1: several velocity fields (two-body contact or separated void faces), every array
   // holds one block per field; the mass gradients only with normals (two-body contact: a weld
-  // of void faces needs none).
+  // of void faces needs none), the contact heat only where a gather reads it (two-body contact,
+  // FLIP: the APIC weld's loss is the scatter loss, kern::weld_fields).
   Grid(const kern::GridGeom& g, bool flip, int nfields = 1, bool normals = true) : geom(g), fields(nfields) {
     const auto nn = g.num_nodes() * static_cast<std::size_t>(nfields) + kern::kLinePad;
     m.assign(nn, 0.0);
@@ -42,8 +43,8 @@ struct Grid {
       if (flip) dv[d].assign(nn, 0.0);  // FLIP increments only where the transfer needs them
       if (nfields > 1 && normals) gm[d].assign(nn, 0.0);
     }
-    if (nfields > 1)
-      for (auto* a : {&vol, &heat}) a->assign(nn, 0.0);
+    if (nfields > 1) vol.assign(nn, 0.0);
+    if (nfields > 1 && (normals || flip)) heat.assign(nn, 0.0);
   }
   // The arrays of grid heat conduction, one field.
   void enable_heat() {

@@ -40,10 +40,7 @@ kern::ParticleView Particles::view() {
   w.V = V.data();
   for (int k = 0; k < kSym; ++k) w.s[k] = s[k].data();
   w.p = p.data();
-  for (int k = 0; k < kern::kDim * kern::kDim; ++k) {
-    w.L[k] = L[k].data();
-    w.C[k] = d(C[k]);
-  }
+  for (int k = 0; k < kern::kDim * kern::kDim; ++k) w.C[k] = d(C[k]);
   w.q = d(q);
   w.e = d(e);
   return w;
@@ -91,7 +88,7 @@ void Particles::append(const Particles& o) {
   cat(m, o.m); cat(V, o.V);
   for (int k = 0; k < kSym; ++k) cat(s[k], o.s[k]);
   cat(p, o.p);
-  for (int k = 0; k < kern::kDim * kern::kDim; ++k) cat(L[k], o.L[k]);
+  cat(curl2, o.curl2); cat(div, o.div); cat(rate2, o.rate2);
   for (int k = 0; k < kern::kDim * kern::kDim; ++k) cat(C[k], o.C[k]);
   cat(e, o.e); cat(epsp, o.epsp); cat(q, o.q); cat(wp, o.wp);
   cat(id, o.id); cat(body, o.body);

@@ -29,15 +29,19 @@ struct FieldName {
 
 struct Particles {
   // Always present. Vector and tensor fields are one array per component: x[d], v[d] by axis;
-  // s[k] by symmetric component (kernels/tensor.hpp's order: xx, yy, xy at D = 2); L and C row
-  // major, L[r * kern::kDim + c].
+  // s[k] by symmetric component (kernels/tensor.hpp's order: xx, yy, xy at D = 2); C row major,
+  // C[r * kern::kDim + c].
   std::vector<double> x[kern::kDim];    // position [m]
   std::vector<double> v[kern::kDim];    // velocity [m/s]
   std::vector<double> m;          // mass per unit thickness [kg/m]
   std::vector<double> V;          // current volume per unit thickness [m^2]
   std::vector<double> s[kSym];    // stress deviator [Pa] (at D = 2, s_zz = -(s_xx + s_yy))
   std::vector<double> p;          // pressure [Pa], compression positive
-  std::vector<double> L[kern::kDim * kern::kDim];  // velocity gradient [1/s]
+  // What the regional statistics read of the velocity gradient L (diagnostics.hpp), as the last
+  // step that stored it left it (Simulation::store_gradient): L itself is never stored.
+  std::vector<double> curl2;  // |curl v|^2 [1/s^2]
+  std::vector<double> div;    // div v = tr L [1/s]
+  std::vector<double> rate2;  // sym L : sym L [1/s^2]
   // Optional: sized 0 unless the scene needs them.
   std::vector<double> C[kern::kDim * kern::kDim];  // APIC affine matrix [1/s]
   std::vector<double> e;      // specific internal energy [J/kg] (energy-dependent EOS)
@@ -51,9 +55,7 @@ struct Particles {
   std::vector<std::uint8_t> field;
 
   std::size_t size() const { return x[0].size(); }
-  // The velocity gradient and the affine matrix by row r and column c.
-  std::vector<double>& grad(int r, int c) { return L[r * kern::kDim + c]; }
-  const std::vector<double>& grad(int r, int c) const { return L[r * kern::kDim + c]; }
+  // The affine matrix by row r and column c.
   std::vector<double>& affine(int r, int c) { return C[r * kern::kDim + c]; }
   const std::vector<double>& affine(int r, int c) const { return C[r * kern::kDim + c]; }
   void resize(std::size_t n);  // resizes the fields in use (optional ones only when enabled)
@@ -70,7 +72,7 @@ struct Particles {
   // Names of the arrays in use (the optional ones only when allocated), as in this struct.
   std::vector<std::string> fields_in_use() const;
   // f(name, array) for every array in use, in the order of fields_in_use (checkpoints): x, y,
-  // vx, vy, m, V, sxx, syy, sxy, p, Lxx, Lxy, Lyx, Lyy, then the optional Cxx .. Cyy, e, epsp, q,
+  // vx, vy, m, V, sxx, syy, sxy, p, curl2, div, rate2, then the optional Cxx .. Cyy, e, epsp, q,
   // wp when allocated, then id, body and (when used) field.
   template <class F>
   void each_array(F&& f) {
@@ -89,7 +91,9 @@ struct Particles {
     f(FieldName{"V"}, V);
     for (int k = 0; k < kSym; ++k) f(FieldName{"s", kern::sym_row(D, k), kern::sym_col(D, k)}, s[k]);
     f(FieldName{"p"}, p);
-    for (int k = 0; k < D * D; ++k) f(FieldName{"L", k / D, k % D}, L[k]);
+    f(FieldName{"curl2"}, curl2);
+    f(FieldName{"div"}, div);
+    f(FieldName{"rate2"}, rate2);
     for (int k = 0; k < D * D; ++k)
       if (!C[k].empty()) f(FieldName{"C", k / D, k % D}, C[k]);
     for (auto [stem, a] : {std::pair{"e", &e}, {"epsp", &epsp}, {"q", &q}, {"wp", &wp}})

@@ -862,7 +862,7 @@ bool RunLoop::stop_requested() {
 }
 
 void RunLoop::step() {
-  // L is stored on the particles only by the steps after which statistics are written (the
+  // the gradient measures are stored only by the steps after which statistics are written (the
   // step's dt is this min, as in step())
   const double t_next = sim_.time() + std::min(sim_.stable_dt(), t_end_ - sim_.time());
   sim_.store_gradient(t_next >= next_energy_ - eps_ || t_next >= t_end_ - eps_ ||

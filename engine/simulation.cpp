@@ -370,6 +370,7 @@ auto Simulation::stress_pass(double& thread0_seconds) {
              std::size_t first, std::size_t last, const kern::Gradient& L, kern::ConstitutiveResult& acc) {
     const bool timed = omp_get_thread_num() == 0;
     const double t0 = timed ? omp_get_wtime() : 0.0;
+    if (store_gradient_) store_gradient_measures(L, first, last, P_);
     for (std::size_t k = 0; k < materials_.size(); ++k) {
       const kern::Selection sel{P_.body.data(), materials_.size() > 1 ? select_[k].data() : nullptr};
       acc.merge(constitutive_block(materials_[k], pv, state, L, first, last, params[k], sel));
@@ -414,14 +415,13 @@ void Simulation::gather_and_update_stress() {
   const auto stress = stress_pass(stress_seconds);
   const auto a = transfer_args();
   const auto q = gather_params();
-  // L of each block in a per-thread buffer (with the energy's mid-step rate), unless asked to
-  // store L on the particles
+  // L of each block in a per-thread buffer (with the energy's mid-step rate)
   const int threads = omp_get_max_threads();
   if (gather_scratch_.size() < kern::kGatherScratch * static_cast<std::size_t>(threads))
     gather_scratch_.assign(kern::kGatherScratch * static_cast<std::size_t>(threads), 0.0);
   const auto update = transfer::BlockUpdate::of(stress);
   const kern::ConstitutiveResult r = kern::with_shape(cfg_.shape, [&](auto shape) {
-    return transfer::gather_and_update_stress<decltype(shape)>(a, q, gather_scratch_.data(), store_gradient_, update);
+    return transfer::gather_and_update_stress<decltype(shape)>(a, q, gather_scratch_.data(), update);
   });
   times_.constitutive += stress_seconds;
   times_.g2p += omp_get_wtime() - t_start - stress_seconds;

@@ -62,13 +62,14 @@ class Simulation {
   // over the steps taken; the grid holds grid().geom.num_nodes().
   double mean_active_nodes() const { return steps_ > 0 ? box_nodes_ / double(steps_) : 0.0; }
   double last_dt() const { return last_dt_; }
-  // Whether step() stores the velocity gradient L [1/s] on the particles (particles().L,
-  // which the regional statistics read). Default on. Off, the constitutive update takes L from
-  // the last gather pass's block buffer (kern::g2p_blocks) and the particles' L arrays keep the
-  // values of the last step that stored them: 96 B less memory traffic per point and step. The
-  // driver turns it on for the steps after which it writes statistics.
+  // Whether step() stores what the regional statistics read of the velocity gradient L on the
+  // particles (particles().curl2, div, rate2: store_gradient_measures, diagnostics.hpp). Default
+  // on. Off, the arrays keep the values of the last step that stored them: 24 B less memory
+  // traffic per point and step. The driver turns it on for the steps after which it writes
+  // statistics.
   void store_gradient(bool on) { store_gradient_ = on; }
-  // The particles' L is that of the last step taken (stored by it, or no step taken yet).
+  // The particles' gradient measures are those of the last step taken (stored by it, or no step
+  // taken yet).
   bool gradient_current() const { return gradient_step_ == steps_; }
   double stable_dt() const;  // the step the next step() would take: CFL, heat conduction limit
   double heat_dt() const { return heat_dt_; }  // explicit conduction limit [s] (inf when off)
@@ -182,7 +183,7 @@ class Simulation {
   double time_ = 0.0, dt_ = 0.0, last_dt_ = 0.0, max_speed_ = 0.0;
   long steps_ = 0;
   bool store_gradient_ = true;
-  long gradient_step_ = 0;  // the step count after the last step that stored L
+  long gradient_step_ = 0;  // the step count after the last step that stored the gradient measures
   WallForces wall_;
   PhaseTimes times_;
 

@@ -57,9 +57,9 @@ void gather_velocity(const StepArgs& a, const kern::G2PParams& q);
 template <class Shape>
 void scatter_momentum(const StepArgs& a, double lp);
 // The pass that forms L (USL's gather; MUSL's position pass over the remapped velocity), with
-// `update` (the constitutive update) behind each block. scratch, store_L: see kern::g2p_blocks.
+// `update` (the constitutive update) behind each block. scratch: see kern::g2p_blocks.
 template <class Shape>
 kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern::G2PParams& q, double* scratch,
-                                                  bool store_L, BlockUpdate update);
+                                                  BlockUpdate update);
 
 }  // namespace SMPM_NS::transfer

@@ -45,20 +45,20 @@ void scatter_momentum(const StepArgs& a, double lp) {
 
 template <class S>
 kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern::G2PParams& q, double* scratch,
-                                                  bool store_L, BlockUpdate update) {
+                                                  BlockUpdate update) {
   using kern::G2PWhat;
   using Result = kern::ConstitutiveResult;
   const bool flip = a.cfg.transfer == Transfer::FLIP;
   if (a.cfg.scheme == Scheme::MUSL)
     return kern::g2p_blocks<S, false, G2PWhat::PositionGradient, false, false, Result>(a.g, a.G, a.P, a.n, q, scratch,
-                                                                                      store_L, update);
+                                                                                      update);
   // USL: always the heating gather (a scene without an energy field heats a scratch array:
   // Simulation::transfer_args); the one without heating would be a fourth of these files'
   // compile time for scenes that are not the study's
   auto usl = [&](auto contact) {  // kern::g2p_particle's Contact: 0, 1 (void faces), 2 (two bodies)
     constexpr int C = decltype(contact)::value;
-    if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, store_L, update);
-    return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, store_L, update);
+    if (flip) return kern::g2p_blocks<S, true, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, update);
+    return kern::g2p_blocks<S, false, G2PWhat::Full, true, C, Result>(a.g, a.G, a.P, a.n, q, scratch, update);
   };
   if (a.cfg.contact) return usl(std::integral_constant<int, 2>{});
   if (a.cfg.fields() > 1) return usl(std::integral_constant<int, 1>{});
@@ -73,4 +73,4 @@ kern::ConstitutiveResult gather_and_update_stress(const StepArgs& a, const kern:
   template void gather_velocity<SHAPE>(const StepArgs&, const kern::G2PParams&); \
   template void scatter_momentum<SHAPE>(const StepArgs&, double);             \
   template kern::ConstitutiveResult gather_and_update_stress<SHAPE>(const StepArgs&, const kern::G2PParams&, double*, \
-                                                                    bool, BlockUpdate);
+                                                                    BlockUpdate);

@@ -583,17 +583,17 @@ ConstitutiveResult constitutive_block(const ParticleView& P, const ConstitutiveS
   return selective ? by_state(T{}) : by_state(F{});
 }
 
-// The constitutive update of all n points, L in the particles' arrays, each thread its share
+// The constitutive update of all n points, L in arrays over all of them, each thread its share
 // (thread_share). The engine runs it inside the last gather pass instead (kern::g2p_blocks).
 template <class Eos, class Strength>
-ConstitutiveResult constitutive_update(const ParticleView& P, const ConstitutiveState& S, std::size_t n,
-                                       const ConstitutiveParams& q, const Eos& eos, const Strength& str,
-                                       Selection sel = {}) {
+ConstitutiveResult constitutive_update(const ParticleView& P, const ConstitutiveState& S, const Gradient& L,
+                                       std::size_t n, const ConstitutiveParams& q, const Eos& eos,
+                                       const Strength& str, Selection sel = {}) {
   ConstitutiveResult r;
 #pragma omp parallel
   {
     const auto [b, e] = thread_share(n);
-    const ConstitutiveResult own = constitutive_block(P, S, Gradient::of(P) + b, b, e, q, eos, str, sel);
+    const ConstitutiveResult own = constitutive_block(P, S, L + b, b, e, q, eos, str, sel);
 #pragma omp critical(smpm_constitutive_merge)
     r.merge(own);
   }

@@ -121,7 +121,7 @@ namespace {
 // present takes the centre-of-mass velocity, after the forces and before them (p / m in p).
 // The heating gather's scatter loss then counts 1/2 m_f |u_f - u_cm|^2 per field, together the
 // weld's loss (for two fields 1/2 mu |u_0 - u_1|^2), and the mid-step L is the single field's:
-// no contact heat (heat = 0).
+// no contact heat (heat = 0 where allocated: the APIC gather of void faces does not read it).
 void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q, double vmin,
                  double* row_loss) {
   const NodeBox b = real_nodes(g, box);
@@ -134,7 +134,7 @@ void weld_fields(const GridGeom& g, const NodeBox& box, const GridView& G, const
         int present = 0;
         for (int f = 0; f < K; ++f) {
           const std::size_t k = a + f * fs;
-          G.heat[k] = 0.0;
+          if (G.heat) G.heat[k] = 0.0;
           V += G.vol[k];
           const double m = G.m[k];
           if (m <= q.mass_eps) continue;

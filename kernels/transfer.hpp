@@ -895,14 +895,15 @@ SMPM_INLINE void g2p_particle(const GridGeom& g, const GridView& G, const Partic
 // body and the remainder: bitwise the same for any thread count (tests/test_contact.cpp,
 // tests/test_elastic.cpp, "determinism").
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, bool PureFlip>
-void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
+void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
+              const Gradient& L) {
 #pragma omp parallel
   {
     const GridGeom gl = g;
     const GridView Gl = G;
     const ParticleView Pl = P;
     const G2PParams ql = q;
-    const Gradient Ll = Gradient::of(P);
+    const Gradient Ll = L;
     if constexpr (kDim == 2) {
 #pragma omp for simd schedule(static)
       for (std::size_t p = 0; p < n; ++p)
@@ -916,25 +917,26 @@ void g2p_loop(const GridGeom& g, const GridView& G, const ParticleView& P, std::
 }
 
 // The FLIP velocity pass with flip_alpha = 1 (MUSL, pure FLIP) takes the PureFlip body: the same
-// velocities, up to the sign of a zero.
+// velocities, up to the sign of a zero. L: arrays over the n points for the passes that form the
+// velocity gradient (What != Velocity); the velocity pass takes none.
 template <class Shape, bool FLIP, G2PWhat What, bool Heat = false, int Contact = 0>
-void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q) {
+void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
+         const Gradient& L = {}) {
   if constexpr (FLIP && What == G2PWhat::Velocity && !Heat && !Contact) {
-    if (q.flip_alpha == 1.0) return g2p_loop<Shape, FLIP, What, Heat, Contact, true>(g, G, P, n, q);
+    if (q.flip_alpha == 1.0) return g2p_loop<Shape, FLIP, What, Heat, Contact, true>(g, G, P, n, q, L);
   }
-  g2p_loop<Shape, FLIP, What, Heat, Contact, false>(g, G, P, n, q);
+  g2p_loop<Shape, FLIP, What, Heat, Contact, false>(g, G, P, n, q, L);
 }
 
 // The pass that forms L (USL's gather, MUSL's position pass) with the work that reads L done
 // block by block right behind it: each thread gathers its share of the points (thread_share) in
 // blocks of kGatherBlock points and, after each block, calls after(first, last, L, acc) on it
 // while the block's L is in cache (the engine's constitutive update; L.xx[i] ... is the
-// gradient of point first + i). Thread t's buffer is at scratch + t * kGatherScratch (7 x
-// kGatherBlock doubles, 448 KiB, in L2): with store_L, L goes to the particles' arrays as with
-// g2p; else to the buffer's first four blocks, and the particles' L arrays are left as they
-// were: the 64 B per point of storing L (write and write-allocate) and the 32 B of reading it
-// back are saved. The heating USL pass's work rate D_mid (L.work(k)) is always in the
-// last three blocks. Acc: the per-thread
+// gradient of point first + i). Thread t's buffer is at scratch + t * kGatherScratch (D^2 +
+// D (D + 1) / 2 blocks of kGatherBlock doubles: 448 KiB in 2D, 960 KiB in 3D): L in the first D^2
+// blocks, the heating USL pass's work rate D_mid (L.work(k)) in the others. L is never stored on
+// the particles: that would cost D^2 doubles per point, and 8 D^2 B per point of writes (and
+// write-allocates) per step; what the statistics read from it, `after` keeps. Acc: the per-thread
 // result of `after`, merged with Acc::merge (whose order must not matter). The gathered values
 // are those of g2p, bitwise (the same particle body; tests/test_kernels.cpp). The block size:
 // blocks of 256-2048 points made the gather 2-6 ns per point slower on one thread (each block
@@ -945,7 +947,7 @@ inline constexpr std::size_t kGatherScratch = (kDim * kDim + sym_size(kDim)) * k
 
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Acc, class After>
 Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_t n, const G2PParams& q,
-               double* scratch, bool store_L, After&& after) {
+               double* scratch, After&& after) {
   static_assert(What != G2PWhat::Velocity, "the velocity pass forms no L");
   // the heating USL pass always forms D_mid: with q.mid = 0 (the updated rate: the linear hat, or
   // strain_rate = "updated") it equals sym L and goes unread, which spares those scenes a second
@@ -963,10 +965,9 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
     Acc own{};
     for (std::size_t first = begin; first < end; first += kGatherBlock) {
       const std::size_t last = std::min(first + kGatherBlock, end);
-      Gradient L = Gradient::of(Pl) + first;
-      if (!store_L)
-        for (int r = 0; r < kDim; ++r)
-          for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
+      Gradient L;
+      for (int r = 0; r < kDim; ++r)
+        for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
       if constexpr (kWork)
         for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
       // 2D: vectorized across points; 3D: one point at a time, each line of its stencil one

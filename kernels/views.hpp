@@ -198,7 +198,8 @@ inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& no
 
 // Particle fields the transfer kernels read or write, one array per component: position and
 // velocity by axis, the stress deviator by symmetric component (kernels/tensor.hpp's order; at
-// D = 2, s_zz = -(s_xx + s_yy)), L and C row major. Total stress = s - p I.
+// D = 2, s_zz = -(s_xx + s_yy)), C row major. Total stress = s - p I. The velocity gradient is
+// not a particle field: the gather passes that form it write it where a Gradient points.
 struct ParticleView {
   static constexpr int K = sym_size(kDim);
   double* x[kDim];
@@ -207,8 +208,6 @@ struct ParticleView {
   double* V;            // current volume [m^2 per unit thickness]
   double* s[K];         // stress deviator [Pa]
   double* p;            // pressure [Pa]
-  // Velocity gradient L = sum_i v_i grad w_ip^T, set by G2P, read by the constitutive update.
-  double* L[kDim * kDim];
   // APIC affine matrix C = B D^-1 (null unless the transfer is APIC).
   double* C[kDim * kDim];
   // Artificial viscous pressure, added to p in the internal force (null: no viscosity).
@@ -219,8 +218,7 @@ struct ParticleView {
   // particle, Particles::field (null: one field).
   const std::uint8_t* field_of = nullptr;
   std::size_t field(std::size_t i) const { return field_of ? field_of[i] : 0; }
-  // The velocity gradient and the affine matrix by row r and column c.
-  SMPM_INLINE double* grad(int r, int c) const { return L[r * kDim + c]; }
+  // The affine matrix by row r and column c.
   SMPM_INLINE double* affine(int r, int c) const { return C[r * kDim + c]; }
 };
 
@@ -234,9 +232,10 @@ inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
   return {begin, begin + q + (t < r ? 1 : 0)};
 }
 
-// Where the last gather pass stores the velocity gradient L [1/s] and the constitutive update
-// reads it: the particles' own arrays (ParticleView::L), or a block buffer of
-// kern::g2p_blocks that holds it for one block of points (element 0 = the block's first point).
+// Where a gather pass that forms the velocity gradient L = sum_i v_i grad w_ip^T [1/s] writes it
+// and the constitutive update reads it: the block buffer of kern::g2p_blocks, which holds it for
+// one block of points (element 0 = the block's first point), or arrays over all points (g2p,
+// constitutive_update: the tests' and benchmarks' separate passes).
 // With the mid-step energy (kern::g2p_blocks' heating USL pass, q.mid = 0.5) it also carries the
 // symmetric mid-step rate D_mid (w: sym of sum_i (v_i^old + v_i^new) / 2 grad w_i^T),
 // whose work with the old stress is the energy increment (kern::constitutive_range); L itself is
@@ -245,11 +244,6 @@ struct Gradient {
   static constexpr int K = sym_size(kDim);
   double* L[kDim * kDim] = {};  // row major
   double* w[K] = {};            // mid-step rate by symmetric component (null: not written)
-  static Gradient of(const ParticleView& P) {
-    Gradient g;
-    for (int k = 0; k < kDim * kDim; ++k) g.L[k] = P.L[k];
-    return g;
-  }
   SMPM_INLINE double*& at(int r, int c) { return L[r * kDim + c]; }
   SMPM_INLINE double* at(int r, int c) const { return L[r * kDim + c]; }
   // the mid-step rate's symmetric component k (kernels/tensor.hpp's order)

@@ -11,7 +11,7 @@
 #include "engine/particles.hpp"
 #include "kernels/sort.hpp"
 
-namespace smpm::test {
+namespace SMPM_NS::test {
 
 struct Bins {
   std::vector<std::uint32_t> key, order, start, hist;
@@ -31,4 +31,4 @@ inline Bins bin(const kern::GridGeom& g, const Particles& P) {
   return b;
 }
 
-}  // namespace smpm::test
+}  // namespace SMPM_NS::test

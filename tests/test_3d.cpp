@@ -15,6 +15,7 @@
 #include "engine/diagnostics.hpp"
 #include "engine/scene.hpp"
 #include "engine/simulation.hpp"
+#include "tests/gradient_arrays.hpp"
 #include "tests/particle_checks.hpp"
 #include "tests/verify_cases.hpp"
 
@@ -26,9 +27,8 @@ namespace {
 using test::verify_scene;
 
 // Every array of the particles, by the checkpoint's names.
-const std::initializer_list<const char*> kAllArrays = {"x",   "y",   "z",   "vx",  "vy",  "vz",  "m",   "V",
-                                                       "sxx", "syy", "szz", "sxy", "sxz", "syz", "p",   "Lxx",
-                                                       "Lxy", "Lxz", "Lyx", "Lyy", "Lyz", "Lzx", "Lzy", "Lzz"};
+const std::initializer_list<const char*> kAllArrays = {"x",   "y",   "z",   "vx",  "vy",  "vz",  "m",   "V",     "sxx",
+                                                       "syy", "szz", "sxy", "sxz", "syz", "p",   "curl2", "div", "rate2"};
 
 }  // namespace
 
@@ -72,6 +72,24 @@ TEST_CASE("3D: axial vibration of an elastic bar, period and amplitude", "[verif
 }
 
 // 25 steps of the void collapse: the shock has entered, the void faces move in their own fields.
+TEST_CASE("3D velocity-gradient measures: rigid rotation and uniform expansion", "[diagnostics][3d]") {
+  const auto measures = test::point_with_measures;
+  // rigid rotation v = w x x, w = (1, 2, 3) /s: L = [[0, -3, 2], [3, 0, -1], [-2, 1, 0]]
+  const Particles r = measures({0, -3, 2, 3, 0, -1, -2, 1, 0});
+  CHECK(r.curl2[0] == Approx(4 * 14.0));  // curl v = 2 w
+  CHECK(r.div[0] == 0.0);
+  CHECK(r.rate2[0] == 0.0);
+  const double a = 0.7;  // uniform expansion v = a x: L = a I
+  const Particles e = measures({a, 0, 0, 0, a, 0, 0, 0, a});
+  CHECK(e.div[0] == Approx(3 * a));
+  CHECK(e.curl2[0] == 0.0);
+  CHECK(e.rate2[0] == Approx(3 * a * a));
+  // pure shear v = (g y, 0, 0): D_xy = D_yx = g / 2, curl v = (0, 0, -g)
+  const Particles s = measures({0, 2.0, 0, 0, 0, 0, 0, 0, 0});
+  CHECK(s.rate2[0] == Approx(2.0));
+  CHECK(s.curl2[0] == Approx(4.0));
+}
+
 TEST_CASE("3D determinism: bitwise-identical particle arrays with 1, 2 and 3 threads", "[determinism][3d]") {
   const int threads0 = omp_get_max_threads();
   std::vector<Particles> out;

@@ -100,7 +100,7 @@ void check_restart(const char* text, int threads, int first, int then) {
   Scene sc = build_scene(toml::parse(text), "t", SHOCKMPM_SOURCE_DIR "/cases");
   Simulation a(sc.geom, sc.solver, sc.materials, sc.body_material, sc.particles);
   for (int s = 0; s < first; ++s) {
-    a.store_gradient(s % 7 == 0);  // as the driver: L stored only before statistics
+    a.store_gradient(s % 7 == 0);  // as the driver: gradient measures stored only before statistics
     a.step();
   }
   const auto file = temp_file("sim.bin");

@@ -9,6 +9,7 @@
 #include "engine/diagnostics.hpp"
 #include "engine/material.hpp"
 #include "engine/thermo.hpp"
+#include "tests/gradient_arrays.hpp"
 
 using namespace smpm;
 
@@ -32,16 +33,17 @@ TEST_CASE("moments against hand-computed values", "[diagnostics]") {
 }
 
 TEST_CASE("velocity-gradient measures: rigid rotation and uniform expansion", "[diagnostics]") {
+  const auto measures = test::point_with_measures;
   const double w = 3.0;  // rigid rotation v = w (-y, x): L = [[0, -w], [w, 0]]
-  const auto r = gradient_measures(kern::Mat<2>{{{0.0, -w}, {w, 0.0}}});
-  CHECK(std::sqrt(r.R2) == Approx(2 * w));  // |curl v| = 2 omega
-  CHECK(r.D2 == 0.0);
-  CHECK(r.S2 == 0.0);                        // no strain rate in a rigid rotation
+  const Particles r = measures({0.0, -w, w, 0.0});
+  CHECK(std::sqrt(r.curl2[0]) == Approx(2 * w));  // |curl v| = 2 omega
+  CHECK(r.div[0] == 0.0);
+  CHECK(r.rate2[0] == 0.0);                        // no strain rate in a rigid rotation
   const double a = 0.7;  // uniform expansion v = a (x, y): L = a I
-  const auto e = gradient_measures(kern::Mat<2>{{{a, 0.0}, {0.0, a}}});
-  CHECK(std::sqrt(e.D2) == Approx(2 * a));   // div v = 2 a in 2D
-  CHECK(e.R2 == 0.0);
-  CHECK(e.S2 == Approx(2 * a * a));          // D:D = a^2 + a^2
+  const Particles e = measures({a, 0.0, 0.0, a});
+  CHECK(e.div[0] == Approx(2 * a));                // div v = 2 a in 2D
+  CHECK(e.curl2[0] == 0.0);
+  CHECK(e.rate2[0] == Approx(2 * a * a));          // D:D = a^2 + a^2
 }
 
 TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
@@ -55,7 +57,7 @@ TEST_CASE("regional statistics on a synthetic particle set", "[diagnostics]") {
     P.m[i] = 2.7e-9;
     P.V[i] = 1e-12;
   }
-  P.grad(0, 0)[1] = 1e6;  // div 1e6/s on one particle of region III
+  P.div[1] = 1e6;  // div 1e6/s on one particle of region III
   Material m;
   m.rho0 = 2700;
   m.E = 69e9;

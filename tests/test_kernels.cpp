@@ -15,19 +15,22 @@
 #include "kernels/sort.hpp"
 #include "kernels/transfer.hpp"
 #include "tests/bins.hpp"
+#include "tests/gradient_arrays.hpp"
 
 using namespace smpm;
 using namespace smpm::kern;
+using smpm::test::GradientArrays;
 
 namespace {
 
 // positions, velocities and velocity gradients the same, bit for bit
-void require_same_kinematics(const Particles& A, const Particles& B) {
+void require_same_kinematics(const Particles& A, const GradientArrays& LA, const Particles& B,
+                             const GradientArrays& LB) {
   for (int d = 0; d < kDim; ++d) {
     REQUIRE(A.x[d] == B.x[d]);
     REQUIRE(A.v[d] == B.v[d]);
   }
-  for (int k = 0; k < kDim * kDim; ++k) REQUIRE(A.L[k] == B.L[k]);
+  REQUIRE(LA == LB);
 }
 
 // the position arrays of compute_keys
@@ -57,7 +60,7 @@ GridGeom make_geom(bool periodic) {
 }
 
 // n random particles inside [x0 + 2h, x1 - 2h] x [y0 + 2h, y1 - 2h] (anywhere when periodic in x),
-// random velocity, velocity gradient and stress.
+// random velocity, affine matrix and stress.
 Particles random_particles(const GridGeom& g, std::size_t n, unsigned seed) {
   std::mt19937_64 rng(seed);
   const double mx = g.wrap[0] ? 0.0 : 2 * g.h;
@@ -77,10 +80,6 @@ Particles random_particles(const GridGeom& g, std::size_t n, unsigned seed) {
     P.s[1][i] = 1e3 * U(rng);
     P.s[2][i] = 1e3 * U(rng);
     P.p[i] = 1e3 * U(rng);
-    P.L[0][i] = 10 * U(rng);
-    P.L[1][i] = 10 * U(rng);
-    P.L[2][i] = 10 * U(rng);
-    P.L[3][i] = 10 * U(rng);
     P.id[i] = static_cast<std::uint32_t>(i);
   }
   P.enable_affine(true);
@@ -276,7 +275,8 @@ void check_conservation(bool periodic) {
   grid_update(g, g.all_nodes(), G, q, nullptr);
   double* vel[] = {G.v[0], G.v[1]};
   fill_periodic_ghosts(g, g.all_nodes(), vel, 2);
-  g2p<S, false, G2PWhat::Full>(g, G, pv, P.size(), G2PParams{0.0, 0.25, 0.0});
+  GradientArrays L(P.size());
+  g2p<S, false, G2PWhat::Full>(g, G, pv, P.size(), G2PParams{0.0, 0.25, 0.0}, L.view());
   double Px2 = 0, Py2 = 0, Lz2 = 0;
   for (std::size_t i = 0; i < P.size(); ++i) {
     Px2 += P.m[i] * P.v[0][i];
@@ -453,7 +453,8 @@ void check_occupied_box(bool periodic) {
   q.walls = Walls{{Wall::Slip, Wall::Slip}, {Wall::Slip, Wall::Slip}};
   q.flip = true;
   const G2PParams gq{q.dt, 0.25, 0.95};
-  auto transfer = [&](Grid& grid, const NodeBox& nb, Particles& Q, bool musl, std::vector<double>& rf) {
+  auto transfer = [&](Grid& grid, const NodeBox& nb, Particles& Q, GradientArrays& L, bool musl,
+                      std::vector<double>& rf) {
     auto G = grid.view();
     auto pv = Q.view();
     clear_grid(g, nb, G, true);
@@ -464,7 +465,7 @@ void check_occupied_box(bool periodic) {
     double* vel[] = {G.v[0], G.v[1], G.dv[0], G.dv[1]};
     fill_periodic_ghosts(g, nb, vel, 4);
     if (!musl) {
-      g2p<S, true, G2PWhat::Full>(g, G, pv, Q.size(), gq);
+      g2p<S, true, G2PWhat::Full>(g, G, pv, Q.size(), gq, L.view());
       return;
     }
     g2p<S, true, G2PWhat::Velocity>(g, G, pv, Q.size(), gq);
@@ -473,7 +474,7 @@ void check_occupied_box(bool periodic) {
     fold_periodic(g, nb, sums + 1, 2);
     grid_velocity_from_momentum(g, nb, G, q);
     fill_periodic_ghosts(g, nb, vel, 2);
-    g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, Q.size(), gq);
+    g2p<S, false, G2PWhat::PositionGradient>(g, G, pv, Q.size(), gq, L.view());
   };
   for (bool musl : {false, true}) {
     INFO("musl " << musl);
@@ -485,9 +486,10 @@ void check_occupied_box(bool periodic) {
         std::fill(v.begin(), v.end(), std::nan(""));
       }
     std::vector<double> rfa(kRowSlots * static_cast<std::size_t>(g.num_lines()), 1.0), rfb = rfa;
-    transfer(a, g.all_nodes(), PA, musl, rfa);
-    transfer(c, box, PB, musl, rfb);
-    require_same_kinematics(PA, PB);
+    GradientArrays LA(P.size()), LB(P.size());
+    transfer(a, g.all_nodes(), PA, LA, musl, rfa);
+    transfer(c, box, PB, LB, musl, rfb);
+    require_same_kinematics(PA, LA, PB, LB);
     REQUIRE(rfa == rfb);  // wall reactions, 0 on the rows outside the box
     // inside the box the grids agree; outside, the box pass wrote nothing
     std::size_t outside = 0;
@@ -530,7 +532,7 @@ TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities
   Particles A = P, B = P;
   auto pa = A.view(), pb = B.view();
   g2p<Linear, true, G2PWhat::Velocity>(g, G, pa, A.size(), gq);                      // pure FLIP body
-  g2p_loop<Linear, true, G2PWhat::Velocity, false, false, false>(g, G, pb, B.size(), gq);  // the blend
+  g2p_loop<Linear, true, G2PWhat::Velocity, false, false, false>(g, G, pb, B.size(), gq, {});  // the blend
   REQUIRE(A.v[0] == B.v[0]);
   REQUIRE(A.v[1] == B.v[1]);
   REQUIRE(A.v[0] != P.v[0]);
@@ -555,9 +557,10 @@ void check_heat_sink() {
   std::vector<double> sink(P.size(), 0.0);
   auto pa = A.view(), pb = B.view();
   pb.e = sink.data();
-  g2p<S, FLIP, What>(g, G, pa, A.size(), gq);
-  g2p<S, FLIP, What, true>(g, G, pb, B.size(), gq);
-  require_same_kinematics(A, B);
+  GradientArrays LA(P.size()), LB(P.size());
+  g2p<S, FLIP, What>(g, G, pa, A.size(), gq, LA.view());
+  g2p<S, FLIP, What, true>(g, G, pb, B.size(), gq, LB.view());
+  require_same_kinematics(A, LA, B, LB);
   if constexpr (!FLIP)
     for (int k = 0; k < kDim * kDim; ++k) REQUIRE(A.C[k] == B.C[k]);
   REQUIRE(A.v[0] != P.v[0]);
@@ -580,8 +583,8 @@ namespace {
 // The last gather pass with the constitutive update behind it, block by block (g2p_blocks), against
 // the two passes one after the other (g2p, then constitutive_update over all points): for USL
 // (APIC, quadratic B-spline; Mie-Grueneisen, J2, energy, viscosity) and MUSL's position pass
-// (linear hat; linear EOS, elastic), with L stored or kept in the block buffer, 1 to 3 threads,
-// whose shares split into blocks and vector remainders differently.
+// (linear hat; linear EOS, elastic), 1 to 3 threads, whose shares split into blocks and vector
+// remainders differently; the L that each block hands to the update is the separate gather's.
 template <class S, G2PWhat What, class Eos, class Strength>
 void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
   const GridGeom g = make_geom(false);
@@ -610,36 +613,33 @@ void check_fused_pass(const Eos& eos, const Strength& str, bool energy) {
   constexpr bool APIC = What == G2PWhat::Full;
   Particles R = P;  // reference: the unfused passes
   auto rv = R.view();
-  g2p<S, false, What>(g, G, rv, R.size(), gq);
-  const auto ref = constitutive_update(rv, state(R), R.size(), cq, eos, str);
+  GradientArrays LR(R.size());
+  g2p<S, false, What>(g, G, rv, R.size(), gq, LR.view());
+  const auto ref = constitutive_update(rv, state(R), LR.view(), R.size(), cq, eos, str);
   REQUIRE(ref.bad == 1700);
   const int threads0 = omp_get_max_threads();
   for (int threads : {1, 2, 3}) {
-    for (bool store : {true, false}) {
-      INFO("threads " << threads << ", store L " << store);
-      omp_set_num_threads(threads);
-      Particles F = P;
-      auto fv = F.view();
-      const auto st = state(F);
-      auto after = [&](std::size_t first, std::size_t last, const Gradient& L, ConstitutiveResult& acc) {
-        acc.merge(constitutive_block(fv, st, L, first, last, cq, eos, str));
-      };
-      std::vector<double> scratch(kGatherScratch * static_cast<std::size_t>(threads), std::nan(""));
-      const auto r = g2p_blocks<S, false, What, false, false, ConstitutiveResult>(g, G, fv, F.size(), gq,
-                                                                                 scratch.data(), store, after);
-      REQUIRE(r.bad == ref.bad);
-      REQUIRE(r.max_speed == ref.max_speed);
-      for (int d = 0; d < kDim; ++d) {
-        REQUIRE(F.x[d] == R.x[d]);
-        REQUIRE(F.v[d] == R.v[d]);
-      }
-      for (int k = 0; k < kSym; ++k) REQUIRE(F.s[k] == R.s[k]);
-      for (auto f : {&Particles::V, &Particles::p, &Particles::e, &Particles::epsp, &Particles::q}) REQUIRE(F.*f == R.*f);
-      if constexpr (APIC)
-        for (int k = 0; k < kDim * kDim; ++k) REQUIRE(F.C[k] == R.C[k]);
-      for (int k = 0; k < kDim * kDim; ++k)
-        REQUIRE(F.L[k] == (store ? R.L[k] : P.L[k]));  // not stored: the arrays keep what they held
-    }
+    INFO("threads " << threads);
+    omp_set_num_threads(threads);
+    Particles F = P;
+    auto fv = F.view();
+    const auto st = state(F);
+    GradientArrays LF(F.size(), std::nan(""));
+    auto after = [&](std::size_t first, std::size_t last, const Gradient& L, ConstitutiveResult& acc) {
+      for (std::size_t i = first; i < last; ++i)
+        for (int k = 0; k < kDim * kDim; ++k) LF.L[k][i] = L.L[k][i - first];
+      acc.merge(constitutive_block(fv, st, L, first, last, cq, eos, str));
+    };
+    std::vector<double> scratch(kGatherScratch * static_cast<std::size_t>(threads), std::nan(""));
+    const auto r = g2p_blocks<S, false, What, false, false, ConstitutiveResult>(g, G, fv, F.size(), gq,
+                                                                               scratch.data(), after);
+    REQUIRE(r.bad == ref.bad);
+    REQUIRE(r.max_speed == ref.max_speed);
+    require_same_kinematics(F, LF, R, LR);
+    for (int k = 0; k < kSym; ++k) REQUIRE(F.s[k] == R.s[k]);
+    for (auto f : {&Particles::V, &Particles::p, &Particles::e, &Particles::epsp, &Particles::q}) REQUIRE(F.*f == R.*f);
+    if constexpr (APIC)
+      for (int k = 0; k < kDim * kDim; ++k) REQUIRE(F.C[k] == R.C[k]);
   }
   omp_set_num_threads(threads0);
 }

@@ -349,8 +349,10 @@ TEST_CASE("Constitutive update of aluminium along a uniaxial-strain compression"
   double x = 0, y = 0, vx = 0, vy = 0, m = al.rho0 * V0, V = V0, sxx = 0, syy = 0, sxy = 0, p = 0;
   double Lxx = 0, Lxy = 0, Lyx = 0, Lyy = -1e5;
   double e = 0, epsp = 0, wp = 0;
-  const kern::ParticleView P{&x,   &y,   &vx,   &vy,   &m,      &V,      &sxx,    &syy,    &sxy,    &p,     &Lxx,
-                             &Lxy, &Lyx, &Lyy,  nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
+  const kern::ParticleView P{&x,   &y,   &vx,     &vy,     &m,      &V,      &sxx,
+                             &syy, &sxy, &p,      nullptr, nullptr, nullptr, nullptr, nullptr, nullptr};
+  kern::Gradient Lg;
+  Lg.L[0] = &Lxx, Lg.L[1] = &Lxy, Lg.L[2] = &Lyx, Lg.L[3] = &Lyy;
   const kern::ConstitutiveState S{&e, &epsp, nullptr, &wp};
   kern::ConstitutiveParams q;
   q.dt = 1e-12;
@@ -363,7 +365,7 @@ TEST_CASE("Constitutive update of aluminium along a uniaxial-strain compression"
   double sig_yield = 0, eps_yield = 0, P_yield = 0;
   while (std::log(V / V0) > -6 * epsY) {
     const double sig_prev = syy - p, eps_prev = std::log(V / V0), P_prev = p;
-    const auto res = kern::constitutive_update(P, S, 1, q, eos, vm);
+    const auto res = kern::constitutive_update(P, S, Lg, 1, q, eos, vm);
     if (res.bad != -1) ++n_bad;
     Vs.push_back(V);
     sig.push_back(syy - p);
@@ -750,8 +752,10 @@ TEST_CASE("A fractured point takes the work of the stress it carried, not of its
   double x = 0, y = 0, vx = 0, vy = 0, m = 0.4 * al.rho0 * V0, V = V0, sxx = 0, syy = 0, sxy = 0, p = 0;
   double Lxx = 2e7, Lxy = 3e7, Lyx = -1e7, Lyy = 1e7;
   double e = 1e5, epsp = 0.3, qv = 0;
-  const kern::ParticleView P{&x,   &y,   &vx,   &vy,   &m,      &V,      &sxx,    &syy,    &sxy,    &p,     &Lxx,
-                             &Lxy, &Lyx, &Lyy,  nullptr, nullptr, nullptr, nullptr, &qv, &e};
+  const kern::ParticleView P{&x,   &y,   &vx, &vy, &m,      &V,      &sxx,
+                             &syy, &sxy, &p,  nullptr, nullptr, nullptr, nullptr, &qv, &e};
+  kern::Gradient Lg;
+  Lg.L[0] = &Lxx, Lg.L[1] = &Lxy, Lg.L[2] = &Lyx, Lg.L[3] = &Lyy;
   const kern::ConstitutiveState S{&e, &epsp, &qv, nullptr};
   kern::ConstitutiveParams q;
   q.dt = 1e-10;
@@ -761,7 +765,7 @@ TEST_CASE("A fractured point takes the work of the stress it carried, not of its
   q.av_linear = 0.06;
   q.av_quadratic = 1.5;
   for (int k = 0; k < 50; ++k) {
-    const auto r = kern::constitutive_update(P, S, 1, q, eos, vm);
+    const auto r = kern::constitutive_update(P, S, Lg, 1, q, eos, vm);
     REQUIRE(r.bad == -1);
   }
   CHECK(V == V0);   // debris does not expand further (unguarded, its volume grows without bound)
@@ -774,12 +778,12 @@ TEST_CASE("A fractured point takes the work of the stress it carried, not of its
   // ... but it compresses, and carries pressure again once packed above rho_min
   Lxx = -2e8, Lxy = 0, Lyx = 0, Lyy = -2e8;
   for (int k = 0; k < 200 && m / V < q.rho_min; ++k) {
-    kern::constitutive_update(P, S, 1, q, eos, vm);
+    kern::constitutive_update(P, S, Lg, 1, q, eos, vm);
     CHECK(p == 0.0);
   }
   REQUIRE(m / V >= q.rho_min);
   Lxx = -5e8, Lyy = -5e8;
-  for (int k = 0; k < 200 && m / V < al.rho0 * 1.05; ++k) kern::constitutive_update(P, S, 1, q, eos, vm);
+  for (int k = 0; k < 200 && m / V < al.rho0 * 1.05; ++k) kern::constitutive_update(P, S, Lg, 1, q, eos, vm);
   CHECK(m / V > al.rho0);
   CHECK(p > 0.0);
 
@@ -790,7 +794,7 @@ TEST_CASE("A fractured point takes the work of the stress it carried, not of its
   e = 1e5;
   Lxx = 5e8, Lxy = 0, Lyx = 0, Lyy = 5e8;  // fast expansion: rho drops below rho0 / 2
   const double a0 = sxx, b0 = syy, c0 = sxy, P0 = p;
-  kern::constitutive_update(P, S, 1, q, eos, vm);
+  kern::constitutive_update(P, S, Lg, 1, q, eos, vm);
   REQUIRE(m / V < q.rho_min);
   const double dV = V - V0, dxy = 0.0;
   const double expect = 1e5 + (q.dt * 0.5 * (V0 + V) * 0.5 * (a0 * Lxx + b0 * Lyy + 2 * c0 * dxy) - 0.5 * P0 * dV) / m;
