@@ -103,11 +103,11 @@ void store_gradient_measures(const kern::Gradient& L, std::size_t first, std::si
     for (int r = 0; r < D; ++r)
       for (int c = 0; c < D; ++c) g(r, c) = L.at(r, c)[i - first];
     const kern::Sym<D> s = kern::sym_part(g);
-    double curl2 = 0.0;
+    double curl2 = 0.0;  // 0 + c^2 is c^2 exactly
     for (int k = D; k < kern::Sym<D>::K; ++k) {
       const int a = kern::sym_row(D, k), b = kern::sym_col(D, k);
       const double c = g(b, a) - g(a, b);
-      curl2 = k == D ? c * c : curl2 + c * c;
+      curl2 += c * c;
     }
     double S2 = s[0] * s[0];
     for (int k = 1; k < D; ++k) S2 += s[k] * s[k];

@@ -260,7 +260,7 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
       g, nb,
       [&](double& row, const Idx<kDim>& i, std::size_t a) {
         const std::size_t b = a + fs;
-        G.heat[a] = G.heat[b] = 0.0;
+        if (G.heat) G.heat[a] = G.heat[b] = 0.0;
         const double m0 = G.m[a], m1 = G.m[b];
         if (m0 <= q.mass_eps || m1 <= q.mass_eps || G.vol[a] + G.vol[b] < vmin) return;
         const double M = m0 + m1;
@@ -285,7 +285,7 @@ void grid_contact(const GridGeom& g, const NodeBox& box, const GridView& G, cons
         // 1/2 mu |u_0 - u_1|^2 (mu = m0 m1 / M, the node then balances as the single field's), a
         // Coulomb contact's the drop of 1/2 mu |v_0 - v_1|^2.
         const double loss = contact_loss(G, a, b, m0, m1, u, w, q, c);
-        G.heat[a] = G.heat[b] = loss / M;
+        if (G.heat) G.heat[a] = G.heat[b] = loss / M;
         row += loss;
         for (int d = 0; d < kDim; ++d) {
           if (q.flip) {

@@ -69,6 +69,8 @@ void grid_update(const GridGeom& g, const NodeBox& b, const GridView& G, const G
 // heating gather adds to the particles' internal energy (kern::g2p_particle). A weld (with the
 // scatter velocity in p) gives both fields the merged scatter velocity as well, so that the
 // heating gather's scatter loss counts its loss and G.heat stays 0. row_loss sums either.
+// G.heat may be null where no gather reads it (void faces under APIC, engine/grid.hpp): then
+// only row_loss takes the loss.
 struct ContactParams {
   double friction = 0.0;         // Coulomb coefficient mu
   bool weld = false;             // weld, not Coulomb contact

@@ -657,6 +657,32 @@ TEST_CASE("last gather pass with the constitutive update block by block: bitwise
   }
 }
 
+// Void faces under APIC without an energy field weld by Coulomb contact (no scatter velocity in
+// p), on a grid without the contact-heat array that no gather reads there (engine/grid.hpp):
+// the same velocities and row losses as on a grid that has it.
+TEST_CASE("void faces without a scatter velocity: contact on a grid without contact heat", "[contact]") {
+  const GridGeom g = make_geom(false);
+  Grid with(g, false, 2, true), without(g, false, 2, false);
+  REQUIRE(without.heat.empty());
+  const std::size_t n = g.node(3, 4), fs = g.num_nodes();
+  for (Grid* gr : {&with, &without}) {
+    gr->m[n] = 2; gr->m[n + fs] = 1;
+    gr->v[0][n] = 1.5; gr->v[1][n] = 0; gr->v[0][n + fs] = -1; gr->v[1][n + fs] = 1;
+    gr->vol[n] = 0.5 * g.h * g.h; gr->vol[n + fs] = 0.45 * g.h * g.h;
+  }
+  GridUpdateParams q;  // scatter_velocity false
+  ContactParams c;
+  c.weld = true;
+  c.volume_fraction = 0.8;
+  std::vector<double> la(static_cast<std::size_t>(g.num_lines()), 0.0), lb = la;
+  grid_contact(g, g.all_nodes(), with.view(), q, c, la.data());
+  grid_contact(g, g.all_nodes(), without.view(), q, c, lb.data());
+  CHECK(with.v[0][n] == Approx((2 * 1.5 - 1.0) / 3));  // merged: the centre-of-mass velocity
+  CHECK(with.v[0][n + fs] == Approx(with.v[0][n]));
+  for (int d = 0; d < kDim; ++d) CHECK(with.v[d] == without.v[d]);
+  CHECK(la == lb);
+}
+
 // The weld of separated void faces (grid_contact, weld): at a node the two fields fill, both
 // take the centre-of-mass velocity and the merged scatter velocity; momentum is conserved, the
 // row loss is 1/2 mu |u_0 - u_1|^2 of the scatter velocities, and a node the fields do not fill
