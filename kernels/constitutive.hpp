@@ -544,8 +544,8 @@ ConstitutiveResult constitutive_range(const ParticleView& P, const ConstitutiveS
   return {vmax, bad == static_cast<std::ptrdiff_t>(cnt) ? -1 : static_cast<std::ptrdiff_t>(first) + bad};
 }
 
-// The constitutive update of points [first, last) on the calling thread, L as above (the
-// particles' arrays at first, or a block buffer of kern::g2p_blocks): the optional state
+// The constitutive update of points [first, last) on the calling thread, L as above (a block
+// buffer of kern::g2p_blocks, or arrays over all points offset to first): the optional state
 // (energy, viscosity, plastic work, selection) chosen at run time, each combination its own loop.
 // Only the combinations that can occur are compiled (each is a vectorized loop, and they were
 // most of the engine's compile time): an EOS that needs energy always has it (S.e is required
