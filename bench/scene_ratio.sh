@@ -6,29 +6,49 @@
 # SCENE: a file of cases/bench/ without .toml; KEY=VALUE: --set overrides. Example, the dense
 # 3D column against the dense 2D strip at 1e6 points on one thread (docs/performance.md, "3D"):
 #   bash bench/scene_ratio.sh 5 "dense_shock grid.cell_size_um=1.25" "dense_shock_3d grid.cell_size_um=4.0"
+# The scene "mls_yardstick" is the colored MLS-MPM reference, build/bench/bench_mls (the elastic
+# block's scene; its KEY=VALUE: grid.cell_size_m, run.max_steps), rated by its steps alone. With
+# RATE=step the driver's runs are rated by their steps alone too (particle-steps over the sum of
+# run.json's phase seconds less output and diagnostics); the default RATE=run takes the whole
+# run's wall time. The yardstick at 1e6 points against the elastic block (docs/performance.md):
+#   RATE=step OMP_NUM_THREADS=2 bash bench/scene_ratio.sh 5 "mls_yardstick" "elastic_block"
 set -euo pipefail
 n=$1; a=$2; b=$3; drv=${4:-build/shockmpm}; steps=${5:-100}
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
+rate="${RATE:-run}"
+[[ $rate == run || $rate == step ]] || { echo "scene_ratio.sh: RATE=$rate: allowed 'run' or 'step'" >&2; exit 2; }
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 run() {  # run "SCENE KEY=VALUE ..." -> M particle-steps/s
   local spec=($1) args=()
+  if [[ ${spec[0]} == mls_yardstick ]]; then
+    "$(dirname "$drv")/bench/bench_mls" --rounds 1 run.max_steps="$steps" "${spec[@]:1}" |
+      sed -n 's/.* \([0-9.]*\) M particle-steps\/s.*/\1/p'
+    return
+  fi
   for kv in "${spec[@]:1}"; do args+=(--set "$kv"); done
   "$drv" run "$root/cases/bench/${spec[0]}.toml" --quiet --set run.max_steps="$steps" "${args[@]}" --overwrite \
     --out "$tmp/run" > /dev/null
-  /usr/bin/python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['particle_steps_per_s'] / 1e6)" \
-    "$tmp/run/run.json"
+  /usr/bin/python3 - "$tmp/run/run.json" "$rate" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+if sys.argv[2] == "run":
+    print(r["particle_steps_per_s"] / 1e6)
+else:
+    t = sum(v for k, v in r["phase_seconds"].items() if k not in ("output", "diagnostics"))
+    print(r["particles"] * r["steps"] / t / 1e6)
+PY
 }
 for i in $(seq "$n"); do
   ra=$(run "$a"); rb=$(run "$b")
   echo "$i $ra $rb"
 done | tee "$tmp/rounds.txt"
-/usr/bin/python3 - "$tmp/rounds.txt" "$a" "$b" "$OMP_NUM_THREADS" <<'PY'
+/usr/bin/python3 - "$tmp/rounds.txt" "$a" "$b" "$OMP_NUM_THREADS" "$rate" <<'PY'
 import statistics, sys
 rows = [tuple(map(float, l.split()[1:])) for l in open(sys.argv[1])]
 r = [b / a for a, b in rows]
-print(f"{sys.argv[3]} / {sys.argv[2]}, {sys.argv[4]} thread(s): rates {statistics.median(a for a, _ in rows):.3f} / "
+print(f"{sys.argv[3]} / {sys.argv[2]}, {sys.argv[4]} thread(s), {sys.argv[5]} rate: rates {statistics.median(a for a, _ in rows):.3f} / "
       f"{statistics.median(b for _, b in rows):.3f} M/s (medians); ratio median {statistics.median(r):.3f}, "
       f"range {min(r):.3f}-{max(r):.3f} over {len(r)} rounds")
 PY
