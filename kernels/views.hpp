@@ -232,6 +232,30 @@ inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
   return {begin, begin + q + (t < r ? 1 : 0)};
 }
 
+// The calling thread's share [begin, end) of n items of weights weight(k) >= 0: contiguous shares
+// in thread order, each starting at the first item before which at least t / threads of the
+// total weight lies (items of weight 0 may fall to either neighbour). Every thread scans all n
+// weights; the shares cover [0, n) exactly once.
+template <class Weight>
+std::pair<std::size_t, std::size_t> thread_share(std::size_t n, Weight&& weight) {
+  const std::uint64_t t = static_cast<std::uint64_t>(omp_get_thread_num());
+  const std::uint64_t nt = static_cast<std::uint64_t>(omp_get_num_threads());
+  std::uint64_t total = 0;
+  for (std::size_t k = 0; k < n; ++k) total += weight(k);
+  const std::uint64_t from = total * t / nt, to = total * (t + 1) / nt;
+  std::size_t begin = n, end = n;
+  std::uint64_t before = 0;  // the weight of the items before k
+  for (std::size_t k = 0; k < n; ++k) {
+    if (begin == n && before >= from) begin = k;
+    if (t + 1 < nt && before >= to) {
+      end = k;
+      break;
+    }
+    before += weight(k);
+  }
+  return {std::min(begin, end), end};
+}
+
 // Where a gather pass that forms the velocity gradient L = sum_i v_i grad w_ip^T [1/s] writes it
 // and the constitutive update reads it: the block buffer of kern::g2p_blocks, which holds it for
 // one block of points (element 0 = the block's first point), or arrays over all points (g2p,
