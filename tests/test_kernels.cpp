@@ -405,10 +405,44 @@ TEST_CASE("colored scatter is bitwise identical for 1 and 2 threads", "[transfer
   auto C = c.view();
   clear_grid(g, g.all_nodes(), C, true);
   p2g_colored<QuadraticBSpline, true, P2GWhat::All>(g, C, pv, b.order.data(), b.start.data(), 0.25);
-  omp_set_num_threads(threads0);
   REQUIRE(a.m == c.m);
   REQUIRE(a.p[0] == c.p[0]);
   REQUIRE(a.f[1] == c.f[1]);
+  for (int t : {3, 5}) {  // shares that do not halve the tiles
+    omp_set_num_threads(t);
+    clear_grid(g, g.all_nodes(), C, true);
+    p2g_colored<QuadraticBSpline, true, P2GWhat::All>(g, C, pv, b.order.data(), b.start.data(), 0.25);
+    REQUIRE(a.m == c.m);
+    REQUIRE(a.p[1] == c.p[1]);
+    REQUIRE(a.f[0] == c.f[0]);
+  }
+  omp_set_num_threads(threads0);
+}
+
+TEST_CASE("thread shares by weight: contiguous, in thread order, every item once, balanced", "[transfer]") {
+  std::mt19937 rng(5);
+  for (std::size_t n : {0, 1, 7, 200}) {
+    std::vector<std::uint64_t> w(n);
+    for (auto& x : w) x = rng() % 4 == 0 ? 0 : rng() % 1000;  // a quarter empty, as tiles at an edge
+    std::uint64_t total = 0, wmax = 0;
+    for (auto x : w) total += x, wmax = std::max(wmax, x);
+    for (int T : {1, 2, 3, 16}) {
+      std::vector<std::pair<std::size_t, std::size_t>> share(T);
+#pragma omp parallel num_threads(T)
+      share[omp_get_thread_num()] = thread_share(n, [&](std::size_t k) { return w[k]; });
+      CAPTURE(n, T);
+      std::size_t next = 0;
+      for (int t = 0; t < T; ++t) {
+        REQUIRE(share[t].first == next);
+        REQUIRE(share[t].second >= share[t].first);
+        std::uint64_t sum = 0;
+        for (std::size_t k = share[t].first; k < share[t].second; ++k) sum += w[k];
+        REQUIRE(sum <= total / T + wmax + 1);  // within one item of an equal share
+        next = share[t].second;
+      }
+      REQUIRE(next == n);
+    }
+  }
 }
 
 namespace {
