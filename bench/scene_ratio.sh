@@ -12,6 +12,9 @@
 # run.json's phase seconds less output and diagnostics); the default RATE=run takes the whole
 # run's wall time. The yardstick at 1e6 points against the elastic block (docs/performance.md):
 #   RATE=step OMP_NUM_THREADS=2 bash bench/scene_ratio.sh 5 "mls_yardstick" "elastic_block"
+# threads=N in a scene's list runs that scene with N threads (OMP_NUM_THREADS otherwise): the
+# 2-thread speed-up of whole runs, 1 and 2 threads alternated (docs/performance.md):
+#   RATE=step bash bench/scene_ratio.sh 5 "porous_shock threads=1" "porous_shock threads=2"
 set -euo pipefail
 n=$1; a=$2; b=$3; drv=${4:-build/shockmpm}; steps=${5:-100}
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
@@ -20,15 +23,19 @@ rate="${RATE:-run}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-run() {  # run "SCENE KEY=VALUE ..." -> M particle-steps/s
-  local spec=($1) args=()
+run() {  # run "SCENE [threads=N] KEY=VALUE ..." -> M particle-steps/s
+  local spec=($1) args=() threads=$OMP_NUM_THREADS kv
+  for kv in "${spec[@]:1}"; do
+    if [[ $kv == threads=* ]]; then threads=${kv#threads=}; else args+=("$kv"); fi
+  done
   if [[ ${spec[0]} == mls_yardstick ]]; then
-    "$(dirname "$drv")/bench/bench_mls" --rounds 1 run.max_steps="$steps" "${spec[@]:1}" |
+    OMP_NUM_THREADS=$threads "$(dirname "$drv")/bench/bench_mls" --rounds 1 run.max_steps="$steps" "${args[@]}" |
       sed -n 's/.* \([0-9.]*\) M particle-steps\/s.*/\1/p'
     return
   fi
-  for kv in "${spec[@]:1}"; do args+=(--set "$kv"); done
-  "$drv" run "$root/cases/bench/${spec[0]}.toml" --quiet --set run.max_steps="$steps" "${args[@]}" --overwrite \
+  local sets=()
+  for kv in "${args[@]}"; do sets+=(--set "$kv"); done
+  OMP_NUM_THREADS=$threads "$drv" run "$root/cases/bench/${spec[0]}.toml" --quiet --set run.max_steps="$steps" "${sets[@]}" --overwrite \
     --out "$tmp/run" > /dev/null
   /usr/bin/python3 - "$tmp/run/run.json" "$rate" <<'PY'
 import json, sys

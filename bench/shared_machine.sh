@@ -7,7 +7,9 @@
 # Policies: "libgomp default" (GOMP_SPINCOUNT=300000, what libgomp does when nothing is set),
 # "spin 1k" (GOMP_SPINCOUNT=1000),
 # "passive" (OMP_WAIT_POLICY=passive), "spin 10k" (GOMP_SPINCOUNT=10000), and "shockmpm default"
-# (nothing set: the driver's own choice, engine/main.cpp).
+# (nothing set: the driver's own choice, engine/main.cpp). POLICIES="NAME,NAME" runs those only.
+# After each policy's rows: its loaded 2-thread rate over its idle 1-thread rate (what a run
+# keeps of one idle core when a CPU hog shares the two).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 BUILD="${1:-$ROOT/build}"
@@ -26,6 +28,7 @@ printf '%-16s %-6s %8s %8s %10s\n' policy load "1 thr" "2 thr" "2thr/1thr"
 for policy in "libgomp default:GOMP_SPINCOUNT=300000" "passive:OMP_WAIT_POLICY=passive" \
               "spin 10k:GOMP_SPINCOUNT=10000" "spin 1k:GOMP_SPINCOUNT=1000" "shockmpm default:SMPM_NONE=1"; do
   name="${policy%%:*}"; envs="${policy#*:}"
+  [[ -z ${POLICIES:-} || ",$POLICIES," == *",$name,"* ]] || continue
   for load in idle loaded; do
     pids=()
     if [ "$load" = loaded ]; then yes > /dev/null & pids+=($!); fi
@@ -36,5 +39,8 @@ for policy in "libgomp default:GOMP_SPINCOUNT=300000" "passive:OMP_WAIT_POLICY=p
     done
     [ ${#pids[@]} -gt 0 ] && kill "${pids[@]}" 2>/dev/null && wait "${pids[@]}" 2>/dev/null || true
     printf '%-16s %-6s %8.2f %8.2f %10.2f\n' "$name" "$load" "${r[0]}" "${r[1]}" "$(echo "${r[1]} / ${r[0]}" | bc -l)"
+    if [ "$load" = idle ]; then idle1=${r[0]}; else
+      printf '%-16s loaded 2 threads / idle 1 thread: %.2f\n' "$name" "$(echo "${r[1]} / $idle1" | bc -l)"
+    fi
   done
 done
