@@ -54,16 +54,26 @@ SHAPE_EVAL_FLOPS = {"linear": 6, "ugimp": 30, "quadratic": 20, "cubic": 40}  # p
 
 
 def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
-    """(bytes, flops) per particle-step of one phase."""
+    """(bytes, flops) per particle-step of one phase, in D = 2 or 3 dimensions (3 when the
+    particles carry a z coordinate). The counts are written for D axes: per-axis arrays and
+    node values D, the stress D (D + 1) / 2 components, C and L D^2; the stencil N^D nodes.
+    The hand counts of tensor arithmetic (the constitutive update) scale with D^2 / 4 from
+    their 2D count. +-30 %, as in 2D."""
     has = set(fields)
+    D = 3 if "z" in has else 2
+    ax = "xyz"[:D]
+    pos, vel = list(ax), ["v" + a for a in ax]
+    stress = ["s" + a + a for a in ax] + ["s" + ax[r] + ax[c] for r in range(D) for c in range(r + 1, D)]
+    affine = ["C" + r + c for r in ax for c in ax]
     apic = "Cxx" in has
     heat = apic and "e" in has       # the APIC gather heats the particles (transfer dissipation)
     flip = cfg["transfer"] == "flip"
     N = SHAPE_N[cfg["shape"]]
-    nodes = N * N
-    ev = 2 * SHAPE_EVAL_FLOPS[cfg["shape"]]
+    nodes = N ** D
+    ev = D * SHAPE_EVAL_FLOPS[cfg["shape"]]
     npp = nodes_per_particle
     ndouble = sum(1 for f in fields if f not in ("id", "body"))
+    tensor = D * D / 4  # tensor arithmetic against its 2D count
 
     def rd(*names):
         return 8 * sum(1 for n in names if n in has)
@@ -72,63 +82,63 @@ def traffic(phase, fields, cfg, nodes_per_particle, permute_every):
         return 16 * sum(1 for n in names if n in has)
 
     if phase == "sort":
-        # keys from x, y (write key 4 B + allocate), histogram and stable scatter (read key
-        # twice, write order 4 B + allocate), and every permute_every steps the physical
-        # permutation of all arrays (read + write each, plus the id and body arrays)
-        b = 16 + 8 + 8 + 8
+        # keys from the coordinates (write key 4 B + allocate), histogram and stable scatter
+        # (read key twice, write order 4 B + allocate), and every permute_every steps the
+        # physical permutation of all arrays (read + write each, plus the id and body arrays)
+        b = 8 * D + 8 + 8 + 8
         if permute_every > 0:
             b += (16 * ndouble + 8 + 2) / permute_every
-        return b, 12
+        return b, 6 * D
     if phase == "p2g":
-        # order index, x, y, vx, vy, m, V, stress (4), q, C (4); grid: clear 5 arrays, then
-        # the tile flush reads and writes 5 arrays per node
-        b = 4 + rd("x", "y", "vx", "vy", "m", "V", "sxx", "syy", "sxy", "p", "q", "Cxx", "Cxy", "Cyx", "Cyy")
-        b += npp * (5 * 8 + 5 * 16)
-        per_node = 1 + (8 if apic else 0) + 4 + 2 + 4 + 8 + 2  # w, affine, momentum, mass, grad, force
-        return b, ev + 30 + nodes * per_node
+        # order index, x, v, m, V, stress, q, C; grid: clear 1 + 2 D arrays, then the tile
+        # flush reads and writes them per node
+        b = 4 + rd(*pos, *vel, "m", "V", *stress, "p", "q", *affine)
+        b += npp * ((1 + 2 * D) * 8 + (1 + 2 * D) * 16)
+        # per node: weight, affine, momentum, mass, gradient, force
+        per_node = (D - 1) + (2 * D * D if apic else 0) + 2 * D + 2 + D * D + 2 * D * D + 2
+        return b, ev + 15 * D + nodes * per_node
     if phase == "grid":
-        # read m, px, py, fx, fy; write vx, vy (and dvx, dvy for FLIP), write-allocate; with
-        # transfer heating also px, py back (the scatter velocity p / m, in place)
+        # read m, p, f; write v (and dv for FLIP), write-allocate; with transfer heating also p
+        # back (the scatter velocity p / m, in place)
         heat_g = apic and "e" in has
-        return npp * (5 * 8 + (4 if flip else 2) * 16 + (16 if heat_g else 0)), npp * 14
+        return npp * ((1 + 2 * D) * 8 + (2 * D if flip else D) * 16 + (8 * D if heat_g else 0)), npp * 7 * D
     if phase == "contact":
-        return npp * 2 * (8 * 8 + 4 * 16), npp * 60
+        return npp * 2 * (4 * D * 8 + 2 * D * 16), npp * 30 * D
     if phase == "g2p":
-        # reads x, y; writes x, y, v, C; heat: reads v, C, e too, and the scatter velocity
-        # (px, py hold p / m after the grid update). L stays in the gather's block buffer
+        # reads x; writes x, v, C; heat: reads v, C, e too, and the scatter velocity (p holds
+        # p / m after the grid update). L stays in the gather's block buffer
         # (kern::g2p_blocks; only its three measures are stored, for the steps the statistics read)
-        b = 2 * 16 + 2 * (8 if (heat or flip) else 16)  # x y rw, v
-        b += rw("Cxx", "Cxy", "Cyx", "Cyy") if heat else 16 * 4 * apic
+        b = D * 16 + D * (8 if (heat or flip) else 16)  # x rw, v
+        b += rw(*affine) if heat else 16 * D * D * apic
         if heat:
             b += rw("e")
-        b += npp * 8 * (2 + (2 if heat else 0) + (2 if flip else 0))
-        per_node = 1 + 4 + 8 + (8 if (apic and cfg["shape"] == "linear") else 0)
+        b += npp * 8 * (D + (D if heat else 0) + (D if flip else 0))
+        per_node = 1 + 2 * D + 2 * D * D + (2 * D * D if (apic and cfg["shape"] == "linear") else 0)
         if heat:
-            per_node += 16
+            per_node += 8 * D
         if flip:
-            per_node += 4
-        flops = ev + 40 + nodes * per_node
+            per_node += 2 * D
+        flops = ev + 20 * D + nodes * per_node
         if cfg.get("scheme") == "musl":
-            # MUSL: the velocity gather above, then a momentum remap (scatter of m v: reads x, y,
-            # vx, vy, m, order; clears and adds px, py), grid velocity (reads m, px, py, writes
-            # vx, vy), and a second gather for position and L (reads x, y, grid v; writes x, y;
-            # L into the block buffer)
-            b += 4 + 40 + npp * (2 * 8 + 2 * 16) + npp * (3 * 8 + 2 * 16)
-            b += 2 * 16 + npp * 8 * 2
-            flops += 2 * ev + nodes * (1 + 4) + npp * 8 + nodes * (1 + 4 + 8)
+            # MUSL: the velocity gather above, then a momentum remap (scatter of m v: reads x, v,
+            # m, order; clears and adds p), grid velocity (reads m, p, writes v), and a second
+            # gather for position and L (reads x, grid v; writes x; L into the block buffer)
+            b += 4 + (2 * D + 1) * 8 + npp * (D * 8 + D * 16) + npp * ((1 + D) * 8 + D * 16)
+            b += D * 16 + npp * 8 * D
+            flops += 2 * ev + nodes * (1 + 2 * D) + npp * 4 * D + nodes * (1 + 2 * D + 2 * D * D)
         return b, flops
     if phase == "constitutive":
-        # V rw, m read, stress (3) rw, p rw, v read, optional e, epsp, wp rw, q write; L from the
+        # V rw, m read, stress rw, p rw, v read, optional e, epsp, wp rw, q write; L from the
         # gather's block buffer (in L2: not counted)
-        b = rd("m", "vx", "vy") + rw("V", "sxx", "syy", "sxy", "p", "e", "epsp", "wp")
+        b = rd("m", *vel) + rw("V", *stress, "p", "e", "epsp", "wp")
         b += rw("q")
-        flops = 60  # Jaumann trial, volume, rho, signal speed (one sqrt), max
+        flops = 60 * tensor  # Jaumann trial, volume, rho, signal speed (one sqrt), max
         if "epsp" in has:
-            flops += 25  # von Mises and the return
+            flops += 25 * tensor  # von Mises and the return
         if "e" in has:
             flops += 40  # Mie-Grueneisen cold curve and the centred energy update
         if "q" in has:
-            flops += 15
+            flops += 15 * tensor
         return b, flops
     if phase == "heat":
         return 0, 0
