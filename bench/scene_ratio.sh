@@ -15,6 +15,8 @@
 # threads=N in a scene's list runs that scene with N threads (OMP_NUM_THREADS otherwise): the
 # 2-thread speed-up of whole runs, 1 and 2 threads alternated (docs/performance.md):
 #   RATE=step bash bench/scene_ratio.sh 5 "porous_shock threads=1" "porous_shock threads=2"
+# PHASES=1 also prints, per phase of the step (run.json phase_seconds), the median ns per
+# particle-step of A and B and the median of the rounds' A / B times (the speed-up of B).
 set -euo pipefail
 n=$1; a=$2; b=$3; drv=${4:-build/shockmpm}; steps=${5:-100}
 export OMP_NUM_THREADS="${OMP_NUM_THREADS:-1}"
@@ -23,7 +25,7 @@ rate="${RATE:-run}"
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
-run() {  # run "SCENE [threads=N] KEY=VALUE ..." -> M particle-steps/s
+run() {  # run "SCENE [threads=N] KEY=VALUE ..." LABEL -> M particle-steps/s
   local spec=($1) args=() threads=$OMP_NUM_THREADS kv
   for kv in "${spec[@]:1}"; do
     if [[ $kv == threads=* ]]; then threads=${kv#threads=}; else args+=("$kv"); fi
@@ -37,9 +39,11 @@ run() {  # run "SCENE [threads=N] KEY=VALUE ..." -> M particle-steps/s
   for kv in "${args[@]}"; do sets+=(--set "$kv"); done
   OMP_NUM_THREADS=$threads "$drv" run "$root/cases/bench/${spec[0]}.toml" --quiet --set run.max_steps="$steps" "${sets[@]}" --overwrite \
     --out "$tmp/run" > /dev/null
-  /usr/bin/python3 - "$tmp/run/run.json" "$rate" <<'PY'
+  /usr/bin/python3 - "$tmp/run/run.json" "$rate" "$tmp/phases_$2.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
+with open(sys.argv[3], "a") as f:  # ns per particle-step of each phase, one line per run
+    f.write(json.dumps({k: v / (r["particles"] * r["steps"]) * 1e9 for k, v in r["phase_seconds"].items()}) + "\n")
 if sys.argv[2] == "run":
     print(r["particle_steps_per_s"] / 1e6)
 else:
@@ -48,7 +52,7 @@ else:
 PY
 }
 for i in $(seq "$n"); do
-  ra=$(run "$a"); rb=$(run "$b")
+  ra=$(run "$a" A); rb=$(run "$b" B)
   echo "$i $ra $rb"
 done | tee "$tmp/rounds.txt"
 /usr/bin/python3 - "$tmp/rounds.txt" "$a" "$b" "$OMP_NUM_THREADS" "$rate" <<'PY'
@@ -59,3 +63,17 @@ print(f"{sys.argv[3]} / {sys.argv[2]}, {sys.argv[4]} thread(s), {sys.argv[5]} ra
       f"{statistics.median(b for _, b in rows):.3f} M/s (medians); ratio median {statistics.median(r):.3f}, "
       f"range {min(r):.3f}-{max(r):.3f} over {len(r)} rounds")
 PY
+if [[ ${PHASES:-0} == 1 && -f $tmp/phases_A.txt && -f $tmp/phases_B.txt ]]; then
+  /usr/bin/python3 - "$tmp/phases_A.txt" "$tmp/phases_B.txt" <<'PY'
+import json, statistics, sys
+A = [json.loads(l) for l in open(sys.argv[1])]
+B = [json.loads(l) for l in open(sys.argv[2])]
+print(f"{'phase':14s} {'A ns/p-step':>12s} {'B ns/p-step':>12s} {'A / B (range)':>22s}")
+for k in A[0]:
+    if not any(a[k] for a in A):  # phases the scene does not have (contact, heat)
+        continue
+    r = [a[k] / b[k] for a, b in zip(A, B) if b[k] > 0]
+    print(f"{k:14s} {statistics.median(a[k] for a in A):12.2f} {statistics.median(b[k] for b in B):12.2f} "
+          f"{statistics.median(r):8.3f} ({min(r):.2f}-{max(r):.2f})")
+PY
+fi
