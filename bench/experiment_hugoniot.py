@@ -2,7 +2,7 @@
 """The engine against measured porous Hugoniots: one run per row of a data file, seed and cell size.
 
   /usr/bin/python3 bench/experiment_hugoniot.py [--data bench/data/porous_iron_hugoniot.csv]
-      [--out DIR] [--dim 2] [--h 4,2] [--seeds 3] [--void-radius-um 10] [--material iron]
+      [--out DIR] [--dim 2|3] [--h 4,2] [--seeds 3] [--void-radius-um 10] [--material iron]
       [--rows 0,3] [--coarse-rows 8] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
       [--quick] [--check PCT] [--dry-run]
 
@@ -18,7 +18,8 @@ Any file with these columns runs; a missing column or a bad value is an error na
 
 Per row, seed (1..--seeds) and cell size (--h), a case is written to DIR/cases/ and run:
   sample   a strip periodic in x (width 6 void diameters, --width-diameters, rounded up to a
-           multiple of every h) on a frictionless (slip) wall at y = 0, which holds the normal
+           multiple of every h; --dim 3: a column periodic in x and z, that width along both, with
+           spherical voids instead of cylindrical ones) on a frictionless (slip) wall at y = 0, which holds the normal
            velocity at zero, pulling as well as pushing, as the symmetry plane does; free top;
            moving at -up onto the wall; porosity 1 - 1/m of the material's dense density
            (random overlapping voids of --void-radius-um, `voids.porosity`, seed = the seed
@@ -185,6 +186,10 @@ def round_up(x, step):
     return math.ceil(x / step - 1e-9) * step
 
 
+def geometry(dim):
+    return "3D, spherical voids" if dim == 3 else "2D plane strain, cylindrical voids"
+
+
 def toml_num(x):
     return repr(float(x))
 
@@ -196,9 +201,23 @@ def case_text(row, idx, a, h, seed, width, height, t_end):
     if phi > 0.0:
         voids = (f"\n[bodies.voids]\nradius_um = {toml_num(a.void_radius_um)}\n"
                  f"porosity = {phi:.6f}   # 1 - 1/m, m = {row['m']:g}\nseed = {seed}\n")
+    w = toml_num(width)
+    v = -row['up_km_s'] * 1e3
+    if a.dim == 3:  # a column periodic in x and z, square across; spherical voids
+        what = "A column periodic in x and z"
+        grid = (f"dimension = 3\ncell_size_um = {toml_num(h)}\nx_range_um = [0.0, {w}]\n"
+                f"y_range_um = [0.0, {toml_num(top)}]\nz_range_um = [0.0, {w}]\nperiodic_x = true\nperiodic_z = true")
+        body = (f'shape = "box"\nmaterial = "sample"\nx_range_um = [0.0, {w}]\ny_range_um = [0.0, {toml_num(height)}]\n'
+                f"z_range_um = [0.0, {w}]\nvelocity_m_s = [0.0, {v!r}, 0.0]")
+    else:
+        what = "A strip periodic in x"
+        grid = (f"cell_size_um = {toml_num(h)}\nx_range_um = [0.0, {w}]\ny_range_um = [0.0, {toml_num(top)}]\n"
+                "periodic_x = true")
+        body = (f'material = "sample"\nx_range_um = [0.0, {w}]\ny_range_um = [0.0, {toml_num(height)}]\n'
+                f"velocity_m_s = [0.0, {v!r}]")
     return f"""# bench/experiment_hugoniot.py: data row {idx} ({os.path.basename(a.data)} line {row['line']}:
 # m {row['m']:g}, up {row['up_km_s']:g} km/s, measured Us {row['Us_km_s']:g} km/s; {row['source']}),
-# h {h:g} um, seed {seed}. A strip periodic in x, porous sample moving at -up onto the slip wall
+# h {h:g} um, seed {seed}. {what}, porous sample moving at -up onto the slip wall
 # at y = 0 (the symmetry plane of a symmetric impact), free top.
 materials_file = "{MATERIALS}"
 
@@ -208,10 +227,7 @@ snapshot_interval_ns = {t_end / 8.0:.4f}
 diagnostics_interval_ns = {t_end / 250.0:.4f}
 
 [grid]
-cell_size_um = {toml_num(h)}
-x_range_um = [0.0, {toml_num(width)}]
-y_range_um = [0.0, {toml_num(top)}]
-periodic_x = true
+{grid}
 
 [solver]
 shape = "quadratic"
@@ -228,10 +244,7 @@ base = "{a.material}"
 
 [[bodies]]
 name = "target"
-material = "sample"
-x_range_um = [0.0, {toml_num(width)}]
-y_range_um = [0.0, {toml_num(height)}]
-velocity_m_s = [0.0, {-row['up_km_s'] * 1e3!r}]
+{body}
 points_per_cell = 2
 {voids}"""
 
@@ -377,9 +390,12 @@ def measure(out, up_km_s, t_end, height, r, case_path, driver, sets):
         res["compacted_swept_Us_km_s"] = res["compacted_Us_km_s"]
     # the shocked band, over the snapshots of the second half
     import h5py
-    gx = run["case_resolved"]["grid"]["x_range_um"]
-    width = (gx[1] - gx[0]) * 1e-6
-    mass = rho0 * float(body["area_m2"]) / int(body["particles"])  # per point [kg/m]: a lattice sample
+    grid = run["case_resolved"]["grid"]
+    across = 1.0  # the band's extent across the impact direction [m]: width (2D) or width x depth (3D)
+    for k in ("x_range_um", "z_range_um") if "z_range_um" in grid else ("x_range_um",):
+        across *= (grid[k][1] - grid[k][0]) * 1e-6
+    size = float(body["volume_m3"] if "volume_m3" in body else body["area_m2"])
+    mass = rho0 * size / int(body["particles"])  # per point [kg/m in 2D, kg in 3D]: a lattice sample
     acc = {k: [] for k in ("P_long_GPa", "p_GPa", "rho_bulk_g_cm3", "rho_points_g_cm3", "Uy_m_s", "T_K")}
     for snap in sorted(glob.glob(os.path.join(out, "fields", "snap_*.h5"))):
         with h5py.File(snap, "r") as f:
@@ -395,7 +411,7 @@ def measure(out, up_km_s, t_end, height, r, case_path, driver, sets):
             acc["P_long_GPa"].append(-float(f["particles/stress_yy"][:][m].mean()) * 1e-9)
             acc["p_GPa"].append(float(f["particles/pressure"][:][m].mean()) * 1e-9)
             acc["rho_points_g_cm3"].append(float(f["particles/density"][:][m].mean()) * 1e-3)
-            acc["rho_bulk_g_cm3"].append(int(m.sum()) * mass / (width * (hi - lo) * 1e-6) * 1e-3)
+            acc["rho_bulk_g_cm3"].append(int(m.sum()) * mass / (across * (hi - lo) * 1e-6) * 1e-3)
             acc["Uy_m_s"].append(float(f["particles/velocity"][:, 1][m].mean()))
             acc["T_K"].append(float(f["particles/temperature"][:][m].mean()))
     res["behind_snapshots"] = len(acc["P_long_GPa"])
@@ -445,7 +461,7 @@ def write_markdown(path, doc):
     L.append(f"Data: `{doc['data']}`; material `{doc['material']}`"
              + (f" with {', '.join('`' + s + '`' for s in doc['sets'])}" if doc["sets"] else "")
              + f"; voids of radius {doc['void_radius_um']:g} um; h = {', '.join(f'{h:g}' for h in hs)} um; "
-             f"{doc['seeds']} seed(s); {doc['dim']}D plane strain. Engine commit {doc['git_commit'] or 'n/a'}"
+             f"{doc['seeds']} seed(s); {geometry(doc['dim'])}. Engine commit {doc['git_commit'] or 'n/a'}"
              + (" (dirty)" if doc.get("git_dirty") == "true" else "") + ".\n")
     L.append(f"Command: `{doc['command']}`\n")
     L.append(f"Us in the frame of the unshocked sample (the wall-frame front speed + up). Engine Us: mean "
@@ -549,7 +565,7 @@ def write_chart(path, doc):
                 Line2D([], [], color="k", marker="x", ls="--", lw=0.8, label="fully compacted Hugoniot")]
     ax.set_xlabel("particle velocity up [km/s]")
     ax.set_ylabel("shock velocity Us [km/s]")
-    ax.set_title(f"{doc['material']}, {doc['dim']}D plane strain, voids r = {doc['void_radius_um']:g} um, "
+    ax.set_title(f"{doc['material']}, {geometry(doc['dim'])}, r = {doc['void_radius_um']:g} um, "
                  f"h = {doc['h_um'][-1]:g} um", fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(handles=handles, fontsize=8, loc="lower right")
@@ -564,7 +580,8 @@ def main():
     ap.add_argument("--data", default=os.path.join(ROOT, "bench", "data", "porous_iron_hugoniot.csv"),
                     help="the measured rows (CSV; columns: " + ", ".join(COLUMNS) + ")")
     ap.add_argument("--out", default=os.path.join(ROOT, "bench", "results", "experiment"), help="output directory")
-    ap.add_argument("--dim", type=int, default=2, help="2 (plane strain; the engine is 2D)")
+    ap.add_argument("--dim", type=int, default=2,
+                    help="2: a strip in plane strain, cylindrical voids; 3: a square column, spherical voids")
     ap.add_argument("--h", default="4,2", help="cell sizes [um], comma-separated (the last, finest, is reported)")
     ap.add_argument("--seeds", type=int, default=3, help="void seeds per row and h (1..N)")
     ap.add_argument("--void-radius-um", type=float, default=10.0, help="void radius [um]")
@@ -588,8 +605,8 @@ def main():
     command = " ".join([os.path.relpath(sys.argv[0], os.getcwd()) if os.path.exists(sys.argv[0]) else sys.argv[0]]
                        + sys.argv[1:])
     try:
-        if a.dim != 2:
-            raise DataError(f"--dim {a.dim}: the engine is 2D (plane strain) only")
+        if a.dim not in (2, 3):
+            raise DataError(f"--dim {a.dim}: 2 (plane strain, cylindrical voids) or 3 (spherical voids)")
         a.hs = sorted(parse_list(a.h, float, "--h"), reverse=True)
         if any(not h > 0.0 for h in a.hs):
             raise DataError(f"--h {a.h}: cell sizes must be positive [um]")
