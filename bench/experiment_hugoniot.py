@@ -565,8 +565,10 @@ def write_chart(path, doc):
                 Line2D([], [], color="k", marker="x", ls="--", lw=0.8, label="fully compacted Hugoniot")]
     ax.set_xlabel("particle velocity up [km/s]")
     ax.set_ylabel("shock velocity Us [km/s]")
+    coarse = [str(r["index"]) for r in doc["rows"] if r.get("engine_h_um") not in (None, doc["h_um"][-1])]
     ax.set_title(f"{doc['material']}, {geometry(doc['dim'])}, r = {doc['void_radius_um']:g} um, "
-                 f"h = {doc['h_um'][-1]:g} um", fontsize=10)
+                 f"h = {doc['h_um'][-1]:g} um"
+                 + (f" (rows {', '.join(coarse)}: {doc['h_um'][0]:g} um)" if coarse else ""), fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(handles=handles, fontsize=8, loc="lower right")
     fig.tight_layout()
