@@ -19,16 +19,17 @@ Any file with these columns runs; a missing column or a bad value is an error na
 Per row, seed (1..--seeds) and cell size (--h), a case is written to DIR/cases/ and run:
   sample   a strip periodic in x (width 6 void diameters, --width-diameters, rounded up to a
            multiple of every h; --dim 3: a column periodic in x and z, that width along both, with
-           spherical voids instead of cylindrical ones) on a frictionless (slip) wall at y = 0, which holds the normal
-           velocity at zero, pulling as well as pushing, as the symmetry plane does; free top;
-           moving at -up onto the wall; porosity 1 - 1/m of the material's dense density
-           (random overlapping voids of --void-radius-um, `voids.porosity`, seed = the seed
-           number), points_per_cell 2, quadratic APIC, USL, cfl 0.3, artificial viscosity on (as
-           cases/verify/porous_strip.toml). The material is `[materials.sample] base =
-           "<--material>"` from the repository's cases/materials.toml; --set overrides reach it
-           as materials.sample.KEY=VALUE. Where the library's dense density differs from the
-           row's rho00 x m by more than 0.1 %, the outputs say so (the porosity follows m; the
-           engine's rho00 is then rho0 / m, not the row's).
+           spherical voids instead of cylindrical ones) on a frictionless (slip) wall at y = 0,
+           which holds the normal velocity at zero, pulling as well as pushing, as the symmetry
+           plane does; free top; moving at -up onto the wall; porosity 1 - 1/m of the
+           material's dense density (random overlapping voids of --void-radius-um,
+           `voids.porosity`, seed = the seed number), points_per_cell 2, quadratic APIC, USL,
+           cfl 0.3, artificial viscosity on (as cases/verify/porous_strip.toml). The material
+           is `[materials.sample] base = "<--material>"` from the repository's
+           cases/materials.toml; --set overrides reach it as materials.sample.KEY=VALUE. Where
+           the library's dense density differs from the row's rho00 x m by more than 0.1 %, the
+           outputs say so (the porosity follows m; the engine's rho00 is then rho0 / m, not the
+           row's).
   frames   the wall is the symmetry plane of a symmetric impact: in the wall frame the unshocked
            sample moves at -up (towards the wall), the shocked material is at rest and the front
            runs up at U (front.csv). The experiment's frame is the unshocked sample's: add +up
