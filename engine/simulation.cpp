@@ -245,7 +245,7 @@ void Simulation::sort_by_cell() {
   const auto& g = grid_.geom;
   const std::size_t n = P_.size();
   const auto pv = P_.view();
-  const auto bad = kern::compute_keys(g, pv.x, n, key_.data());
+  const auto bad = kern::sort_by_cell(g, pv.x, n, key_.data(), hist_.data(), cell_start_.data(), order_.data());
   if (bad >= 0) {
     std::string span;
     for (int d = 0; d < kern::kDim; ++d)
@@ -254,7 +254,6 @@ void Simulation::sort_by_cell() {
     throw StepError("particle left the grid: " + describe_particle(static_cast<std::size_t>(bad)) +
                     "; the grid spans " + span + " m: enlarge the grid or add a wall");
   }
-  kern::counting_sort(key_.data(), n, g.num_keys(), hist_.data(), cell_start_.data(), order_.data());
 }
 
 void Simulation::bin_particles() {

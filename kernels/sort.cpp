@@ -7,40 +7,22 @@
 
 namespace SMPM_NS::kern {
 
-std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key) {
-  std::ptrdiff_t bad = static_cast<std::ptrdiff_t>(n);
-#pragma omp parallel
-  {
-    // thread-local geometry and pointers (through the shared ones GCC reloads them per point)
-    const KeyGeom gl(g);
-    const double* __restrict pl[kDim];
-    for (int d = 0; d < kDim; ++d) pl[d] = pos[d];
-    std::uint32_t* __restrict kl = key;
-#pragma omp for simd schedule(static) reduction(min : bad)
-    for (std::size_t i = 0; i < n; ++i) {
-      Vec<kDim> pt;
-#pragma GCC unroll 3
-      for (int d = 0; d < kDim; ++d) pt[d] = pl[d][i];
-      const CellKey k = cell_key(gl, pt);
-      kl[i] = k.key;
-      bad = std::min(bad, k.inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
-    }
-  }
-  return bad == static_cast<std::ptrdiff_t>(n) ? -1 : bad;
-}
-
-// Each thread counts its contiguous chunk of particles into its own histogram, over the key
-// range [lo, hi) its chunk touches: the particles are nearly sorted (the engine permutes them into
-// key order every few steps), so the ranges barely overlap and the histogram work (zeroing, the
+// Binning in one parallel region (the keys and the sort were two, each a wake-up of the
+// sleeping threads): the keys (vectorized, with the first point outside the grid), then each
+// thread counts its contiguous chunk of particles into its own histogram, over the key range
+// [lo, hi) its chunk touches. The particles are nearly sorted (the engine permutes them into key
+// order every few steps), so the ranges barely overlap and the histogram work (zeroing, the
 // scan, the offsets) is split among the threads instead of each thread paying for all nkeys
 // keys, which on a grid with many empty cells (the elastic block: 0.8 keys per particle) kept
 // the sort from scaling with threads. In any order the result is the same; only the ranges grow.
-void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, std::uint32_t* hist,
-                   std::uint32_t* cell_start, std::uint32_t* order) {
+std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key,
+                            std::uint32_t* hist, std::uint32_t* cell_start, std::uint32_t* order) {
   constexpr int kMaxThreads = 1024;
   std::uint32_t block_total[kMaxThreads];
   std::size_t lo[kMaxThreads], hi[kMaxThreads];
+  const std::size_t nkeys = g.num_keys();
   const int nthreads = std::min(omp_get_max_threads(), kMaxThreads);
+  std::ptrdiff_t first_bad = static_cast<std::ptrdiff_t>(n);
 #pragma omp parallel num_threads(nthreads)
   {
     const int T = omp_get_num_threads();
@@ -48,6 +30,22 @@ void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, s
     // contiguous particle chunk and key block of this thread
     const auto [i0, i1] = thread_share(n);
     const auto [k0, k1] = thread_share(nkeys);
+    {
+      // thread-local geometry and pointers (through the shared ones GCC reloads them per point)
+      const KeyGeom gl(g);
+      const double* __restrict pl[kDim];
+      for (int d = 0; d < kDim; ++d) pl[d] = pos[d];
+      std::uint32_t* __restrict kl = key;
+#pragma omp for simd schedule(static) reduction(min : first_bad)
+      for (std::size_t i = 0; i < n; ++i) {
+        Vec<kDim> pt;
+#pragma GCC unroll 3
+        for (int d = 0; d < kDim; ++d) pt[d] = pl[d][i];
+        const CellKey k = cell_key(gl, pt);
+        kl[i] = k.key;
+        first_bad = std::min(first_bad, k.inside ? static_cast<std::ptrdiff_t>(n) : static_cast<std::ptrdiff_t>(i));
+      }
+    }
     std::uint32_t kmin = ~0u, kmax = 0;
 #pragma omp simd reduction(min : kmin) reduction(max : kmax)
     for (std::size_t i = i0; i < i1; ++i) {
@@ -59,46 +57,48 @@ void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, s
     std::uint32_t* h = hist + static_cast<std::size_t>(t) * nkeys;
     std::fill(h + lo[t], h + hi[t], 0u);
     for (std::size_t i = i0; i < i1; ++i) ++h[key[i]];
+    if (first_bad == static_cast<std::ptrdiff_t>(n)) {  // read after the keys' barrier: all agree
 #pragma omp barrier
-    // totals per key for this thread's key block
-    std::uint32_t block = 0;
-    for (std::size_t k = k0; k < k1; ++k) cell_start[k] = 0;
-    for (int u = 0; u < T; ++u) {
-      const std::uint32_t* hu = hist + static_cast<std::size_t>(u) * nkeys;
-      for (std::size_t k = std::max(k0, lo[u]); k < std::min(k1, hi[u]); ++k) cell_start[k] += hu[k];
-    }
-    for (std::size_t k = k0; k < k1; ++k) block += cell_start[k];
-    block_total[t] = block;
-#pragma omp barrier
-    std::uint32_t base = 0;  // exclusive scan of the block totals
-    for (int u = 0; u < t; ++u) base += block_total[u];
-    // the threads whose key range meets this key block, in thread order: a few, since the
-    // particles are nearly sorted (testing all T threads for every key made this loop cost
-    // nkeys tests per thread whatever the thread count, and the sort 5x at 16 threads)
-    int meets[kMaxThreads];
-    int nmeet = 0;
-    for (int u = 0; u < T; ++u)
-      if (lo[u] < k1 && hi[u] > k0) meets[nmeet++] = u;
-    // turn counts into start offsets, and per-thread histograms into per-thread write cursors
-    for (std::size_t k = k0; k < k1; ++k) {
-      const std::uint32_t c = cell_start[k];
-      cell_start[k] = base;
-      std::uint32_t off = base;
-      for (int j = 0; j < nmeet; ++j) {
-        const int u = meets[j];
-        if (k < lo[u] || k >= hi[u]) continue;
-        std::uint32_t& hu = hist[static_cast<std::size_t>(u) * nkeys + k];
-        const std::uint32_t cu = hu;
-        hu = off;
-        off += cu;
+      // totals per key for this thread's key block
+      std::uint32_t block = 0;
+      for (std::size_t k = k0; k < k1; ++k) cell_start[k] = 0;
+      for (int u = 0; u < T; ++u) {
+        const std::uint32_t* hu = hist + static_cast<std::size_t>(u) * nkeys;
+        for (std::size_t k = std::max(k0, lo[u]); k < std::min(k1, hi[u]); ++k) cell_start[k] += hu[k];
       }
-      base += c;
-    }
+      for (std::size_t k = k0; k < k1; ++k) block += cell_start[k];
+      block_total[t] = block;
 #pragma omp barrier
-    for (std::size_t i = i0; i < i1; ++i) order[h[key[i]]++] = static_cast<std::uint32_t>(i);
-#pragma omp single
-    cell_start[nkeys] = static_cast<std::uint32_t>(n);
+      std::uint32_t base = 0;  // exclusive scan of the block totals
+      for (int u = 0; u < t; ++u) base += block_total[u];
+      // the threads whose key range meets this key block, in thread order: a few, since the
+      // particles are nearly sorted (testing all T threads for every key made this loop cost
+      // nkeys tests per thread whatever the thread count, and the sort 5x at 16 threads)
+      int meets[kMaxThreads];
+      int nmeet = 0;
+      for (int u = 0; u < T; ++u)
+        if (lo[u] < k1 && hi[u] > k0) meets[nmeet++] = u;
+      // turn counts into start offsets, and per-thread histograms into per-thread write cursors
+      for (std::size_t k = k0; k < k1; ++k) {
+        const std::uint32_t c = cell_start[k];
+        cell_start[k] = base;
+        std::uint32_t off = base;
+        for (int j = 0; j < nmeet; ++j) {
+          const int u = meets[j];
+          if (k < lo[u] || k >= hi[u]) continue;
+          std::uint32_t& hu = hist[static_cast<std::size_t>(u) * nkeys + k];
+          const std::uint32_t cu = hu;
+          hu = off;
+          off += cu;
+        }
+        base += c;
+      }
+#pragma omp barrier
+      for (std::size_t i = i0; i < i1; ++i) order[h[key[i]]++] = static_cast<std::uint32_t>(i);
+      if (t == T - 1) cell_start[nkeys] = static_cast<std::uint32_t>(n);
+    }
   }
+  return first_bad == static_cast<std::ptrdiff_t>(n) ? -1 : first_bad;
 }
 
 }  // namespace SMPM_NS::kern

@@ -33,7 +33,7 @@ struct KeyGeom {
 // inside the tile (x fastest). Grid units are (x - origin) * (1 / h), the same expression as the
 // transfers' (kernels/transfer.hpp): a key and a stencil computed from one position agree on its
 // cell even at a cell edge, which the colored scatter's tile halo relies on. Every value is an
-// integer below 2^32, so the arithmetic in doubles is exact. Branch-free, so compute_keys
+// integer below 2^32, so the arithmetic in doubles is exact. Branch-free, so sort_by_cell's key loop
 // vectorizes; the point comes by value and the result is returned (a pointer to a local array
 // or an output reference inside the `omp simd` loop kept it scalar and 6x slower). inside is
 // false (key then that of cell 0) when the point is outside the grid's cells
@@ -65,15 +65,13 @@ SMPM_INLINE CellKey cell_key(const KeyGeom& g, const Vec<kDim> pt) {
   return {static_cast<std::uint32_t>(tile * g.cells_per_tile + cell), inside};
 }
 
-// Computes key[i] for every particle, pos[d] its coordinate arrays. Returns the lowest index of
-// a particle outside the grid (or NaN), or -1 when all are inside.
-std::ptrdiff_t compute_keys(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key);
-
-// Stable counting sort of the keys. Outputs: cell_start[k] (size nkeys + 1), the first sorted
-// position of key k; order[s], the particle at sorted position s. hist is scratch of
-// at least omp_get_max_threads() * nkeys entries.
-void counting_sort(const std::uint32_t* key, std::size_t n, std::size_t nkeys, std::uint32_t* hist,
-                   std::uint32_t* cell_start, std::uint32_t* order);
+// Bins the particles, pos[d] their coordinate arrays: key[i], the key of particle i's cell, for
+// every particle; then a stable counting sort of the keys into cell_start[k] (size nkeys + 1),
+// the first sorted position of key k, and order[s], the particle at sorted position s. hist is
+// scratch of at least omp_get_max_threads() * nkeys entries. Returns -1, or the lowest index of
+// a particle outside the grid (or NaN): then cell_start and order are not formed.
+std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::size_t n, std::uint32_t* key,
+                            std::uint32_t* hist, std::uint32_t* cell_start, std::uint32_t* order);
 
 // out[s] = in[order[s]]: physical permutation of one particle array into sorted order.
 template <class T>

@@ -1,5 +1,5 @@
 // The points of a kernel test binned by cell: keys, the sorted order and each key's first
-// position (kern::compute_keys, kern::counting_sort), for the engine's dimension.
+// position (kern::sort_by_cell), for the engine's dimension.
 #pragma once
 #include <catch2/catch.hpp>
 #include <omp.h>
@@ -26,8 +26,7 @@ inline Bins bin(const kern::GridGeom& g, const Particles& P) {
   b.hist.resize(static_cast<std::size_t>(omp_get_max_threads()) * g.num_keys());
   std::array<const double*, kern::kDim> x;
   for (int d = 0; d < kern::kDim; ++d) x[d] = P.x[d].data();
-  REQUIRE(kern::compute_keys(g, x.data(), n, b.key.data()) == -1);
-  kern::counting_sort(b.key.data(), n, g.num_keys(), b.hist.data(), b.start.data(), b.order.data());
+  REQUIRE(kern::sort_by_cell(g, x.data(), n, b.key.data(), b.hist.data(), b.start.data(), b.order.data()) == -1);
   return b;
 }
 
