@@ -56,7 +56,7 @@ void heat_scatter(const GridGeom& g, const HeatGrid& H, const HeatParticles& P, 
   for_each_tile_colored<2>(
       g, cell_start,
       [&](const TileBlock& blk, std::uint32_t s0, std::uint32_t s1) {
-        const TileSink<2> sink{blk.s, blk.lo, blk.span};
+        const TileSink<2> sink{{blk.s}, blk.lo, blk.span};
         for (std::uint32_t s = s0; s < s1; ++s) {
           const std::uint32_t p = order[s];
           const auto st = heat_stencil<Shape>(g, P, p, lp);

@@ -15,16 +15,21 @@ namespace SMPM_NS::kern {
 // with D = sum_i w_i (x_i - x_p)^2 per axis (h^2/4 quadratic, h^2/3 cubic).
 
 // What each shape declares besides its name and eval(): N nodes per axis, whether APIC takes C
-// from the gradient, and whether D = sum_i w_i (x_i - x_p)^2 is the same everywhere.
-template <int Nodes, bool ApicGradient, bool ConstantD>
+// from the gradient, whether D = sum_i w_i (x_i - x_p)^2 is the same everywhere, and whether
+// the support's first node is the point's cell plus a fixed offset cell_first (floor(t) +
+// cell_first; then every point of a cell has the same nodes, which the one-field scatter sums
+// per cell, kern::p2g_cells).
+template <int Nodes, bool ApicGradient, bool ConstantD, bool CellStencil = false, int CellFirst = 0>
 struct ShapeTraits {
   static constexpr int N = Nodes;
   static constexpr bool apic_gradient = ApicGradient;
   static constexpr bool constant_D = ConstantD;
+  static constexpr bool cell_stencil = CellStencil;
+  static constexpr int cell_first = CellFirst;
 };
 
 // Linear hat (classic MPM, Sulsky 1994). Support 2 nodes.
-struct Linear : ShapeTraits<2, true, false> {
+struct Linear : ShapeTraits<2, true, false, true, 0> {
   static constexpr const char* name = "linear";
   SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(t);
@@ -88,7 +93,7 @@ struct QuadraticBSpline : ShapeTraits<3, false, true> {
 };
 
 // Cubic B-spline. Support 4 nodes.
-struct CubicBSpline : ShapeTraits<4, false, true> {
+struct CubicBSpline : ShapeTraits<4, false, true, true, -1> {
   static constexpr const char* name = "cubic";
   SMPM_INLINE static int eval(double t, double /*lp*/, double* w, double* dw) {
     const double b = std::floor(t) - 1.0;

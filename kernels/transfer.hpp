@@ -38,7 +38,7 @@ struct AtomicAdd {
 
 template <class Add>
 struct GridSink {
-  static constexpr bool kSlotVectors = false;
+  static constexpr bool kSlotVectors = false, kFullUnroll = false;
   const GridGeom& g;
   const GridView& G;
   std::size_t node(const Idx<kDim>& i) const { return g.node(i); }
@@ -72,14 +72,31 @@ struct Slot {
   }
 };
 
+// The adds of K values per node (Slot) into a node-major block s, node n's values at K n.
+template <int KS>
+struct SlotAdds {
+  static constexpr int K = KS;
+  double* s;
+  inline void add_momentum(std::size_t n, const double* q) const {
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::momentum + d] += q[d];
+  }
+  inline void add_mass_force(std::size_t n, double m, const double* f) const {
+    s[K * n + Slot::mass] += m;
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::force + d] += f[d];
+  }
+  inline void add_contact(std::size_t n, const double* gm, double vol) const {
+    for (int d = 0; d < kDim; ++d) s[K * n + Slot::contact + d] += gm[d];
+    s[K * n + Slot::contact + kDim] += vol;
+  }
+  inline void add_volume(std::size_t n, double vol) const { s[K * n + Slot::contact] += vol; }
+};
+
 // K values per node (Slot); velocity fields follow each other, span^kDim nodes apart.
 template <int KS>
-struct TileSink {
+struct TileSink : SlotAdds<KS> {
   // 3D: a node's K values span whole 8-double vectors (p2g_colored pads K), added as vectors
   // (scatter_slots)
-  static constexpr int K = KS;
-  static constexpr bool kSlotVectors = kDim == 3 && K % 8 == 0;
-  double* s;
+  static constexpr bool kSlotVectors = kDim == 3 && KS % 8 == 0, kFullUnroll = false;
   Idx<kDim> lo;
   int span;
   std::size_t node(const Idx<kDim>& i) const {
@@ -93,18 +110,17 @@ struct TileSink {
     return k;
   }
   std::size_t field_offset(std::size_t f) const { return f * static_cast<std::size_t>(ipow(span, kDim)); }
-  inline void add_momentum(std::size_t n, const double* q) const {
-    for (int d = 0; d < kDim; ++d) s[K * n + Slot::momentum + d] += q[d];
-  }
-  inline void add_mass_force(std::size_t n, double m, const double* f) const {
-    s[K * n + Slot::mass] += m;
-    for (int d = 0; d < kDim; ++d) s[K * n + Slot::force + d] += f[d];
-  }
-  inline void add_contact(std::size_t n, const double* gm, double vol) const {
-    for (int d = 0; d < kDim; ++d) s[K * n + Slot::contact + d] += gm[d];
-    s[K * n + Slot::contact + kDim] += vol;
-  }
-  inline void add_volume(std::size_t n, double vol) const { s[K * n + Slot::contact] += vol; }
+};
+
+// The sums of one cell's points over their common stencil of N^kDim nodes, stencil node k's
+// values at K k (kern::p2g_cells): every address a constant once the stencil is unrolled, so the
+// sums stay in registers.
+template <int KS, int N>
+struct CellSink : SlotAdds<KS> {
+  static constexpr bool kSlotVectors = false, kFullUnroll = true;
+  std::size_t node(const Idx<kDim>&) const { return 0; }
+  std::size_t stride(int d) const { return static_cast<std::size_t>(ipow(N, d)); }
+  std::size_t field_offset(std::size_t) const { return 0; }
 };
 
 // A point's position in grid units, (x - origin) * (1 / h) per axis.
@@ -285,11 +301,11 @@ inline void p2g_particle(const GridGeom& g, const Sink& sink, const ParticleView
     }
   };
   // 3D: a node's values as vectors (scatter_slots); one field: by lines, the fewest
-  // instructions on node addresses; several fields: fully unrolled, which measures faster there
-  // (docs/performance.md, "What was tried")
+  // instructions on node addresses; several fields, and a cell's sums: fully unrolled, which
+  // measures faster there (docs/performance.md, "What was tried")
   if constexpr (Sink::kSlotVectors)
     scatter_slots<Shape, APIC, What, Contact, Normals>(st, sink, first, m, mv, mC, vs, mh, Vp);
-  else if constexpr (Contact) st.for_each(node);
+  else if constexpr (Contact || Sink::kFullUnroll) st.for_each(node);
   else st.for_each_by_line(node);
 }
 
@@ -445,12 +461,53 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
   return b;
 }
 
+// The one-field scatter of one tile's points for a shape whose stencil is its cell's
+// (Shape::cell_stencil): the points of a cell, sorted together, share their N^kDim nodes, so
+// their contributions are summed in registers (CellSink) and added to the tile's block once per
+// cell. Point by point, consecutive points of a cell added to the same block values through
+// memory, each add waiting for the one before. A node's value is its cells' sums added in cell
+// order, each sum in point order: fixed for any thread count. cs: the tile's cpt + 1 cell
+// starts; the tile's first cell is the block's node lo + 1 on every axis.
+template <class Shape, bool APIC, P2GWhat What, int K>
+inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const ParticleView& P, const std::uint32_t* order,
+                      const std::uint32_t* cs, double lp) {
+  constexpr int N = Shape::N, Nodes = ipow(N, kDim);
+  const int cpt = g.cells_per_tile();
+  for (int j = 0; j < cpt; ++j) {
+    if (cs[j] == cs[j + 1]) continue;
+    alignas(64) double acc[K * Nodes] = {};
+    const CellSink<K, N> cell{{acc}};
+    for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s) p2g_particle<Shape, APIC, What>(g, cell, P, order[s], lp);
+    Idx<kDim> first;
+    int rest = j;
+    for (int d = 0; d < kDim; ++d) {
+      first[d] = sink.lo[d] + 1 + rest % g.tile + Shape::cell_first;
+      rest /= g.tile;
+    }
+    const std::size_t n0 = sink.node(first);
+#pragma GCC unroll 64
+    for (int k = 0; k < Nodes; ++k) {
+      double* const v = sink.s + K * node_index(sink, n0, Stencil<Shape, kDim>::digits(k));
+      const double* const a = acc + K * k;
+#pragma GCC unroll 3
+      for (int d = 0; d < kDim; ++d) v[Slot::momentum + d] += a[Slot::momentum + d];
+      if constexpr (What == P2GWhat::All) {
+        v[Slot::mass] += a[Slot::mass];
+#pragma GCC unroll 3
+        for (int d = 0; d < kDim; ++d) v[Slot::force + d] += a[Slot::force + d];
+      }
+    }
+  }
+}
+
 // Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
 // G.fields velocity fields (two bodies: two, with mass gradients; void faces: two or four, with
-// volumes).
+// volumes). MUSL's one-field momentum scatter of a shape whose stencil is its cell's goes cell by
+// cell (p2g_cells; the full scatter summed per cell measured slower: docs/performance.md).
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
+  constexpr bool kCells = Shape::cell_stencil && !Contact && kDim == 2 && What == P2GWhat::Momentum;
   // 3D: whole vectors of 8 values per node (scatter_slots), one cache line for 7 or 8 values
   constexpr int K0 = Slot::count(Contact, Normals), K = kDim == 3 ? (K0 + 7) / 8 * 8 : K0;
   constexpr int FMax = Contact ? (Normals ? 2 : 4) : 1;
@@ -458,8 +515,14 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
   for_each_tile_colored<K, FMax>(
       g, cell_start,
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
-        p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, TileSink<K>{b.s, b.lo, b.span}, P, order, s0,
-                                                                    s1, lp);
+        const TileSink<K> sink{{b.s}, b.lo, b.span};
+        if constexpr (kCells) {
+          std::size_t t = 0;  // the tile's index, from its block's first node
+          for (int d = kDim - 1; d >= 0; --d) t = t * g.tiles(d) + (b.lo[d] + 1) / g.tile;
+          p2g_cells<Shape, APIC, What, K>(g, sink, P, order, cell_start + t * g.cells_per_tile(), lp);
+        } else {
+          p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, sink, P, order, s0, s1, lp);
+        }
       },
       [&](const double* v, std::size_t n0, int f) {
         const std::size_t n = n0 + f * G.fstride;
