@@ -464,7 +464,7 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
 // The one-field scatter of one tile's points for a shape whose stencil is its cell's
 // (Shape::cell_stencil): the points of a cell, sorted together, share their N^kDim nodes, so
 // their contributions are summed in registers (CellSink) and added to the tile's block once per
-// cell. Point by point, consecutive points of a cell added to the same block values through
+// cell. Point by point, consecutive points of a cell would add to the same block values through
 // memory, each add waiting for the one before. A node's value is its cells' sums added in cell
 // order, each sum in point order: fixed for any thread count. cs: the tile's cpt + 1 cell
 // starts; the tile's first cell is the block's node lo + 1 on every axis.
