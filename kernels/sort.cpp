@@ -23,10 +23,10 @@ std::pair<std::uint32_t, std::uint32_t> key_range(const std::uint32_t* key, std:
 
 }  // namespace
 
-// Binning in one parallel region (the keys and the sort were two, each a wake-up of the
-// sleeping threads): the keys (vectorized, with the first point outside the grid), then each
-// thread counts its contiguous chunk of particles into its own histogram, over the key range
-// [lo, hi) its chunk touches. The particles are nearly sorted (the engine permutes them into key
+// Binning in one parallel region (each region wakes the threads that sleep between regions):
+// the keys (vectorized, with the first point outside the grid), then each thread counts its
+// contiguous chunk of particles into its own histogram, over the key range [lo, hi) its chunk
+// touches. The particles are nearly sorted (the engine permutes them into key
 // order every few steps), so the ranges barely overlap and the histogram work (zeroing, the
 // scan, the offsets) is split among the threads instead of each thread paying for all nkeys
 // keys, which on a grid with many empty cells (the elastic block: 0.8 keys per particle) kept
