@@ -338,6 +338,7 @@ struct TileBlock {
   double* s;
   Idx<kDim> lo;  // the block's first node
   int span;
+  std::size_t tile;  // the tile's index: its cells' keys start at tile * cells_per_tile
 };
 struct OneField {
   unsigned operator()(std::uint32_t, std::uint32_t) const { return 1u; }
@@ -408,7 +409,7 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
         const std::size_t t = tile(static_cast<int>(k), lo);
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
         if (s0 == s1) continue;
-        const TileBlock blk{scratch, lo, span};
+        const TileBlock blk{scratch, lo, span, t};
         const unsigned used = F > 1 ? fields(s0, s1) : 1u;
         for (int f = 0; f < F; ++f)
           if ((used >> f) & 1u) std::fill(scratch + f * block, scratch + (f + 1) * block, 0.0);
@@ -461,14 +462,14 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
   return b;
 }
 
-// The one-field scatter of one tile's points for a shape whose stencil is its cell's
+// MUSL's one-field momentum remap of one tile's points for a shape whose stencil is its cell's
 // (Shape::cell_stencil): the points of a cell, sorted together, share their N^kDim nodes, so
 // their contributions are summed in registers (CellSink) and added to the tile's block once per
 // cell. Point by point, consecutive points of a cell would add to the same block values through
 // memory, each add waiting for the one before. A node's value is its cells' sums added in cell
 // order, each sum in point order: fixed for any thread count. cs: the tile's cpt + 1 cell
 // starts; the tile's first cell is the block's node lo + 1 on every axis.
-template <class Shape, bool APIC, P2GWhat What, int K>
+template <class Shape, bool APIC, int K>
 inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const ParticleView& P, const std::uint32_t* order,
                       const std::uint32_t* cs, double lp) {
   constexpr int N = Shape::N, Nodes = ipow(N, kDim);
@@ -477,7 +478,8 @@ inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const Particle
     if (cs[j] == cs[j + 1]) continue;
     alignas(64) double acc[K * Nodes] = {};
     const CellSink<K, N> cell{{acc}};
-    for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s) p2g_particle<Shape, APIC, What>(g, cell, P, order[s], lp);
+    for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s)
+      p2g_particle<Shape, APIC, P2GWhat::Momentum>(g, cell, P, order[s], lp);
     Idx<kDim> first;
     int rest = j;
     for (int d = 0; d < kDim; ++d) {
@@ -491,11 +493,6 @@ inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const Particle
       const double* const a = acc + K * k;
 #pragma GCC unroll 3
       for (int d = 0; d < kDim; ++d) v[Slot::momentum + d] += a[Slot::momentum + d];
-      if constexpr (What == P2GWhat::All) {
-        v[Slot::mass] += a[Slot::mass];
-#pragma GCC unroll 3
-        for (int d = 0; d < kDim; ++d) v[Slot::force + d] += a[Slot::force + d];
-      }
     }
   }
 }
@@ -517,9 +514,7 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
       [&](const TileBlock& b, std::uint32_t s0, std::uint32_t s1) {
         const TileSink<K> sink{{b.s}, b.lo, b.span};
         if constexpr (kCells) {
-          std::size_t t = 0;  // the tile's index, from its block's first node
-          for (int d = kDim - 1; d >= 0; --d) t = t * g.tiles(d) + (b.lo[d] + 1) / g.tile;
-          p2g_cells<Shape, APIC, What, K>(g, sink, P, order, cell_start + t * g.cells_per_tile(), lp);
+          p2g_cells<Shape, APIC, K>(g, sink, P, order, cell_start + b.tile * g.cells_per_tile(), lp);
         } else {
           p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, sink, P, order, s0, s1, lp);
         }
