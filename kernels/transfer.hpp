@@ -323,12 +323,15 @@ inline void p2g_range(const GridGeom& g, const Sink& sink, const ParticleView& P
 // L1/L2-resident scratch block covering its footprint (body(block, s0, s1) for the particles at
 // sorted positions [s0, s1)), then the block is handed node by node to flush(values,
 // grid_node, f), clipped to the node storage (a partial last tile's block reaches past it).
-// Each thread takes one run of consecutive tiles of a color holding about 1 / threads of its
-// points (thread_share by points), the same region of the grid in every color: the nodes that
-// neighbouring tiles of different colors share then stay in one core's cache. (Tiles handed
-// out one at a time interleave the threads, and those nodes' cache lines moved between the
-// cores at every color: the porous 2D scatter at 1e5 points scaled 1.50 with 2 threads, its
-// threads each 25 % slower than one thread alone; docs/performance.md, "Thread scaling".)
+// Each thread takes one run of consecutive tiles of a color, the same region of the grid in
+// every color: the nodes that neighbouring tiles of different colors share then stay in one
+// core's cache. (Tiles handed out one at a time interleave the threads, and those nodes' cache
+// lines moved between the cores at every color: the porous 2D scatter at 1e5 points scaled
+// 1.50 with 2 threads, its threads each 25 % slower than one thread alone; docs/performance.md,
+// "Thread scaling".) The runs come from for_each_split, weighted by points: the two threads of a
+// pair split their run as they go, one from each end, and reach the color's barrier together
+// whatever the tiles cost. Which thread scatters a tile changes no sum: the tiles of one color
+// touch disjoint nodes.
 // With F fields (F <= FMax, the scratch's capacity) the block holds F sub-blocks of span^kDim
 // nodes, field f's at f * K * span^kDim; fields(s0, s1) says which of them the tile's particles
 // scatter into (bit f), and only those are zeroed and flushed (a four-field run's tiles mostly
@@ -376,6 +379,7 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
   const int cpt = g.cells_per_tile();
   const int span = tile_span(g.tile);
   const std::size_t block = static_cast<std::size_t>(K) * ipow(span, kDim);
+  PairSplit splits[1 << kDim][kMaxPairs];
 #pragma omp parallel
   {
     alignas(64) double scratch[K * FMax * ipow(tile_span(kMaxTile), kDim)];
@@ -399,16 +403,16 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
         }
         return t;
       };
-      const auto [kb, ke] = thread_share(static_cast<std::size_t>(count), [&](std::size_t k) {
+      const auto weight = [&](std::size_t k) {
         Idx<kDim> lo;
         const std::size_t t = tile(static_cast<int>(k), lo);
         return std::uint64_t{cell_start[(t + 1) * cpt] - cell_start[t * cpt]};
-      });
-      for (std::size_t k = kb; k < ke; ++k) {
+      };
+      const auto run_tile = [&](std::size_t k) {
         Idx<kDim> lo;
         const std::size_t t = tile(static_cast<int>(k), lo);
         const std::uint32_t s0 = cell_start[t * cpt], s1 = cell_start[(t + 1) * cpt];
-        if (s0 == s1) continue;
+        if (s0 == s1) return;
         const TileBlock blk{scratch, lo, span, t};
         const unsigned used = F > 1 ? fields(s0, s1) : 1u;
         for (int f = 0; f < F; ++f)
@@ -421,7 +425,10 @@ void for_each_tile_colored(const GridGeom& g, const std::uint32_t* cell_start, B
             for (int i = 0; i < len; ++i) flush(sr + K * i, n0 + i, f);
           });
         }
-      }
+      };
+      for_each_split(splits[color], static_cast<std::size_t>(count), weight, [&](std::size_t k0, std::size_t k1) {
+        for (std::size_t k = k0; k < k1; ++k) run_tile(k);
+      });
 #pragma omp barrier
     }
   }
@@ -1003,8 +1010,10 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 }
 
 // The pass that forms L (USL's gather, MUSL's position pass) with the work that reads L done
-// block by block right behind it: each thread gathers its share of the points (thread_share) in
-// blocks of kGatherBlock points and, after each block, calls after(first, last, L, acc) on it
+// block by block right behind it: each thread gathers its runs of the points (for_each_split
+// over units of kGatherUnit points: the two threads of a pair split their points as they go,
+// so a run of costlier points - plastic, shocked, fractured - does not leave one waiting) in
+// blocks of up to kGatherBlock points and, after each block, calls after(first, last, L, acc) on it
 // while the block's L is in cache (the engine's constitutive update; L.xx[i] ... is the
 // gradient of point first + i). Thread t's buffer is at scratch + t * kGatherScratch (D^2 +
 // D (D + 1) / 2 blocks of kGatherBlock doubles: 448 KiB in 2D, 960 KiB in 3D): L in the first D^2
@@ -1017,6 +1026,7 @@ void g2p(const GridGeom& g, const GridView& G, const ParticleView& P, std::size_
 // restarts the prefetch streams of both loops, about 20 arrays); 4096-16384 measured alike
 // (docs/performance.md).
 inline constexpr std::size_t kGatherBlock = 8192;
+inline constexpr std::size_t kGatherUnit = 256;  // points per item of the threads' split (for_each_split)
 inline constexpr std::size_t kGatherScratch = (kDim * kDim + sym_size(kDim)) * kGatherBlock;  // doubles per thread
 
 template <class Shape, bool FLIP, G2PWhat What, bool Heat, int Contact, class Acc, class After>
@@ -1028,35 +1038,42 @@ Acc g2p_blocks(const GridGeom& g, const GridView& G, const ParticleView& P, std:
   // instantiation of every gather (compile time) for 3 stores per point
   constexpr bool kWork = What == G2PWhat::Full && Heat;
   Acc total{};
+  PairSplit splits[kMaxPairs];
 #pragma omp parallel
   {
-    const GridGeom gl = g;
-    const GridView Gl = G;
-    const ParticleView Pl = P;
-    const G2PParams ql = q;
     double* const buf = scratch + kGatherScratch * static_cast<std::size_t>(omp_get_thread_num());
-    const auto [begin, end] = thread_share(n);
     Acc own{};
-    for (std::size_t first = begin; first < end; first += kGatherBlock) {
-      const std::size_t last = std::min(first + kGatherBlock, end);
-      Gradient L;
-      for (int r = 0; r < kDim; ++r)
-        for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
-      if constexpr (kWork)
-        for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
-      // 2D: vectorized across points; 3D: one point at a time, each line of its stencil one
-      // vector (gather_sums_by_line; the 3D gather vectorized across points, by gather
-      // instructions for 27 nodes, was slower: docs/performance.md)
-      if constexpr (kDim == 2) {
+    const auto points = [&](std::size_t begin, std::size_t end) {
+      // locals of this call, which the particle stores cannot alias (through the closure's
+      // references GCC reloads them per point and does not vectorize: the gather 2x slower)
+      const GridGeom gl = g;
+      const GridView Gl = G;
+      const ParticleView Pl = P;
+      const G2PParams ql = q;
+      for (std::size_t first = begin; first < end; first += kGatherBlock) {
+        const std::size_t last = std::min(first + kGatherBlock, end);
+        Gradient L;
+        for (int r = 0; r < kDim; ++r)
+          for (int c = 0; c < kDim; ++c) L.at(r, c) = buf + (r * kDim + c) * kGatherBlock;
+        if constexpr (kWork)
+          for (int k = 0; k < sym_size(kDim); ++k) L.work(k) = buf + (kDim * kDim + k) * kGatherBlock;
+        // 2D: vectorized across points; 3D: one point at a time, each line of its stencil one
+        // vector (gather_sums_by_line; the 3D gather vectorized across points, by gather
+        // instructions for 27 nodes, was slower: docs/performance.md)
+        if constexpr (kDim == 2) {
 #pragma omp simd
-        for (std::size_t p = first; p < last; ++p)
-          g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
-      } else {
-        for (std::size_t p = first; p < last; ++p)
-          g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+          for (std::size_t p = first; p < last; ++p)
+            g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+        } else {
+          for (std::size_t p = first; p < last; ++p)
+            g2p_particle<Shape, FLIP, What, Heat, Contact, false, kWork>(gl, Gl, Pl, p, ql, L, p - first);
+        }
+        after(first, last, L, own);
       }
-      after(first, last, L, own);
-    }
+    };
+    // the points in runs of whole units (the last one partial), split between the pairs' threads
+    for_each_split(splits, (n + kGatherUnit - 1) / kGatherUnit, [](std::size_t) { return std::uint64_t{1}; },
+                   [&](std::size_t u0, std::size_t u1) { points(u0 * kGatherUnit, std::min(u1 * kGatherUnit, n)); });
 #pragma omp critical(smpm_g2p_blocks)
     total.merge(own);
   }

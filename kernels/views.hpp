@@ -3,6 +3,7 @@
 #pragma once
 #include "dimension.hpp"
 #include <algorithm>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -232,28 +233,92 @@ inline std::pair<std::size_t, std::size_t> thread_share(std::size_t n) {
   return {begin, begin + q + (t < r ? 1 : 0)};
 }
 
-// The calling thread's share [begin, end) of n items of weights weight(k) >= 0: contiguous shares
-// in thread order, each starting at the first item before which at least t / threads of the
-// total weight lies (items of weight 0 may fall to either neighbour). Every thread scans all n
-// weights; the shares cover [0, n) exactly once.
+// Items [begin, end) of the parts [p0, p1) when n items of weights weight(k) >= 0 are cut into
+// nparts contiguous parts in order, part p starting at the first item before which at least
+// p / nparts of the total weight lies (items of weight 0 may fall to either neighbour). The
+// parts cover [0, n) exactly once.
 template <class Weight>
-std::pair<std::size_t, std::size_t> thread_share(std::size_t n, Weight&& weight) {
-  const std::uint64_t t = static_cast<std::uint64_t>(omp_get_thread_num());
-  const std::uint64_t nt = static_cast<std::uint64_t>(omp_get_num_threads());
+std::pair<std::size_t, std::size_t> weighted_parts(std::size_t n, Weight&& weight, std::uint64_t p0, std::uint64_t p1,
+                                                   std::uint64_t nparts) {
+  if (p0 == 0 && p1 == nparts) return {0, n};
   std::uint64_t total = 0;
   for (std::size_t k = 0; k < n; ++k) total += weight(k);
-  const std::uint64_t from = total * t / nt, to = total * (t + 1) / nt;
+  const std::uint64_t from = total * p0 / nparts, to = total * p1 / nparts;
   std::size_t begin = n, end = n;
   std::uint64_t before = 0;  // the weight of the items before k
   for (std::size_t k = 0; k < n; ++k) {
     if (begin == n && before >= from) begin = k;
-    if (t + 1 < nt && before >= to) {
+    if (p1 < nparts && before >= to) {
       end = k;
       break;
     }
     before += weight(k);
   }
   return {std::min(begin, end), end};
+}
+
+// The calling thread's share [begin, end) of n items of weights weight(k) >= 0: its part of
+// weighted_parts in thread order. Every thread scans all n weights.
+template <class Weight>
+std::pair<std::size_t, std::size_t> thread_share(std::size_t n, Weight&& weight) {
+  const std::uint64_t t = static_cast<std::uint64_t>(omp_get_thread_num());
+  return weighted_parts(n, weight, t, t + 1, static_cast<std::uint64_t>(omp_get_num_threads()));
+}
+
+// A run of items [b, e) that two threads split as they go: the front thread takes chunks from
+// the front, the back thread from the back, each a quarter of what is left (at least one item),
+// until they meet. Each thread's items are one contiguous run, and the two finish within about
+// one chunk of each other whatever the items cost. A chunk is claimed with one compare-and-swap
+// on the pair's word; the items' own work needs no atomics. init() may be called by both
+// threads: the first call sets the run, a later one (the same run) leaves it.
+class alignas(64) PairSplit {
+ public:
+  void reset() { v_.store(kUnset, std::memory_order_relaxed); }
+  void init(std::uint32_t b, std::uint32_t e) {
+    std::uint64_t unset = kUnset;
+    v_.compare_exchange_strong(unset, pack(b, e), std::memory_order_acq_rel);
+  }
+  // The next chunk [c0, c1) of the calling side; false when the run is used up.
+  bool claim(bool front, std::uint32_t& c0, std::uint32_t& c1) {
+    std::uint64_t v = v_.load(std::memory_order_acquire);
+    for (;;) {
+      const std::uint32_t lo = static_cast<std::uint32_t>(v), hi = static_cast<std::uint32_t>(v >> 32);
+      if (lo >= hi) return false;
+      const std::uint32_t c = std::max<std::uint32_t>(1, (hi - lo) / 4);
+      c0 = front ? lo : hi - c;
+      c1 = c0 + c;
+      const std::uint64_t next = front ? pack(c1, hi) : pack(lo, c0);
+      if (v_.compare_exchange_weak(v, next, std::memory_order_acq_rel)) return true;
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kUnset = ~std::uint64_t{0};
+  static std::uint64_t pack(std::uint32_t b, std::uint32_t e) { return std::uint64_t{b} | (std::uint64_t{e} << 32); }
+  std::atomic<std::uint64_t> v_{kUnset};
+};
+
+inline constexpr int kMaxPairs = 32;  // thread pairs that split their items; further threads take fixed shares
+
+// In an omp parallel region, body(k0, k1) for each run [k0, k1) of the calling thread's items
+// of [0, n) of weights weight(k): threads go in pairs, a pair's run holds about 2 / threads of the total weight
+// (weighted_parts) and its two threads split it as they go (PairSplit: the even thread from the
+// front, the odd one from the back), so the two finish together whatever the items cost; an odd
+// last thread, or one past kMaxPairs pairs, takes its own share (thread_share). Each thread's
+// items are one contiguous run. splits: kMaxPairs splits, freshly reset, shared by the team.
+template <class Weight, class Body>
+void for_each_split(PairSplit* splits, std::size_t n, Weight&& weight, Body&& body) {
+  const int t = omp_get_thread_num(), nt = omp_get_num_threads(), pair = t / 2;
+  if ((t ^ 1) < nt && pair < kMaxPairs) {
+    const auto [b, e] = weighted_parts(n, weight, 2 * pair, 2 * pair + 2, nt);
+    PairSplit& split = splits[pair];
+    split.init(static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(e));
+    std::uint32_t c0, c1;
+    while (split.claim(t % 2 == 0, c0, c1)) body(std::size_t{c0}, std::size_t{c1});
+  } else {
+    const auto [b, e] = thread_share(n, weight);
+    if (b < e) body(b, e);
+  }
 }
 
 // Where a gather pass that forms the velocity gradient L = sum_i v_i grad w_ip^T [1/s] writes it

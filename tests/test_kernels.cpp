@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <random>
 
@@ -494,6 +495,44 @@ TEST_CASE("thread shares by weight: contiguous, in thread order, every item once
         next = share[t].second;
       }
       REQUIRE(next == n);
+      for (int p = 0; 2 * p + 1 < T; ++p) {  // a pair's run: its two threads' shares together
+        const auto run = weighted_parts(n, [&](std::size_t k) { return w[k]; }, 2 * p, 2 * p + 2, T);
+        REQUIRE(run.first == share[2 * p].first);
+        REQUIRE(run.second == share[2 * p + 1].second);
+      }
+    }
+  }
+}
+
+// Two threads split a run from its two ends: each takes one contiguous run, together every item
+// once. A thread held up (here: until the other has finished) keeps only its first chunk, at
+// most a quarter of the items.
+TEST_CASE("pair split: two contiguous runs that cover the items once, the held-up thread one chunk", "[transfer]") {
+  for (std::uint32_t n : {0u, 1u, 2u, 5u, 97u, 1000u}) {
+    for (int held : {-1, 0, 1}) {
+      PairSplit split;
+      split.reset();
+      std::vector<int> owner(n, -1);
+      std::atomic<bool> other_done{false};
+#pragma omp parallel num_threads(2)
+      {
+        const int t = omp_get_thread_num();
+        split.init(3, 3 + n);
+        std::uint32_t c0, c1;
+        while (split.claim(t == 0, c0, c1)) {
+          if (t == held && omp_get_num_threads() == 2)
+            while (!other_done.load()) {
+            }
+          for (std::uint32_t k = c0; k < c1; ++k) owner[k - 3] = t;
+        }
+        if (t != held) other_done.store(true);
+      }
+      CAPTURE(n, held);
+      REQUIRE(std::all_of(owner.begin(), owner.end(), [](int o) { return o >= 0; }));
+      std::uint32_t k = 0;  // the front thread's items [0, k), the back thread's [k, n)
+      while (k < n && owner[k] == 0) ++k;
+      for (std::uint32_t i = k; i < n; ++i) REQUIRE(owner[i] == 1);
+      if (held >= 0) REQUIRE((held == 0 ? k : n - k) <= std::max<std::uint32_t>(1, n / 4));
     }
   }
 }
