@@ -301,11 +301,12 @@ class alignas(64) PairSplit {
 inline constexpr int kMaxPairs = 32;  // thread pairs that split their items; further threads take fixed shares
 
 // In an omp parallel region, body(k0, k1) for each run [k0, k1) of the calling thread's items
-// of [0, n) of weights weight(k): threads go in pairs, a pair's run holds about 2 / threads of the total weight
-// (weighted_parts) and its two threads split it as they go (PairSplit: the even thread from the
-// front, the odd one from the back), so the two finish together whatever the items cost; an odd
-// last thread, or one past kMaxPairs pairs, takes its own share (thread_share). Each thread's
-// items are one contiguous run. splits: kMaxPairs splits, freshly reset, shared by the team.
+// of [0, n) of weights weight(k): threads go in pairs, a pair's run holds about 2 / threads of
+// the total weight (weighted_parts), and its two threads split it as they go (PairSplit: the
+// even thread from the front, the odd one from the back), so the two finish together whatever
+// the items cost; an odd last thread, or one past kMaxPairs pairs, takes its own share
+// (thread_share). Each thread's items are one contiguous run. splits: kMaxPairs splits, freshly
+// reset (constructed), shared by the team.
 template <class Weight, class Body>
 void for_each_split(PairSplit* splits, std::size_t n, Weight&& weight, Body&& body) {
   const int t = omp_get_thread_num(), nt = omp_get_num_threads(), pair = t / 2;
