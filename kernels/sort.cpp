@@ -21,6 +21,34 @@ std::pair<std::uint32_t, std::uint32_t> key_range(const std::uint32_t* key, std:
   return {kmin, kmax};
 }
 
+// Thread t's block [k0, k1) of the nkeys keys for the passes over keys: an equal share of their
+// work, one unit per key and one more per thread whose histogram range [lo[u], hi[u]) holds it
+// (an equal count of keys left the thread whose block held the points' keys waiting at the
+// next barrier). The blocks cover the keys once, in thread order, whatever the ranges.
+std::pair<std::size_t, std::size_t> key_block(const std::size_t* lo, const std::size_t* hi, int T, int t,
+                                              std::size_t nkeys) {
+  const auto work = [&](std::size_t k) {  // the work of keys [0, k)
+    std::uint64_t w = k;
+    for (int u = 0; u < T; ++u)
+      if (hi[u] > lo[u] && k > lo[u]) w += std::min(k, hi[u]) - lo[u];
+    return w;
+  };
+  const std::uint64_t total = work(nkeys);
+  const auto start = [&](int p) {  // the first key k with work(k) >= total p / T
+    if (p <= 0) return std::size_t{0};
+    if (p >= T) return nkeys;
+    const std::uint64_t target = total * static_cast<std::uint64_t>(p) / static_cast<std::uint64_t>(T);
+    std::size_t a = 0, b = nkeys;
+    while (a < b) {
+      const std::size_t mid = a + (b - a) / 2;
+      if (work(mid) < target) a = mid + 1;
+      else b = mid;
+    }
+    return a;
+  };
+  return {start(t), start(t + 1)};
+}
+
 }  // namespace
 
 // Binning in one parallel region (each region wakes the threads that sleep between regions):
@@ -45,7 +73,6 @@ std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::si
     const int t = omp_get_thread_num();
     // contiguous particle chunk and key block of this thread
     const auto [i0, i1] = thread_share(n);
-    const auto [k0, k1] = thread_share(nkeys);
     {
       // thread-local geometry and pointers (through the shared ones GCC reloads them per point)
       const KeyGeom gl(g);
@@ -70,6 +97,7 @@ std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::si
     for (std::size_t i = i0; i < i1; ++i) ++h[key[i]];
     if (first_bad == static_cast<std::ptrdiff_t>(n)) {  // read after the keys' barrier: all agree
 #pragma omp barrier
+      const auto [k0, k1] = key_block(lo, hi, T, t, nkeys);
       // totals per key for this thread's key block
       std::uint32_t block = 0;
       for (std::size_t k = k0; k < k1; ++k) cell_start[k] = 0;
