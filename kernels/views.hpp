@@ -273,7 +273,6 @@ std::pair<std::size_t, std::size_t> thread_share(std::size_t n, Weight&& weight)
 // threads: the first call sets the run, a later one (the same run) leaves it.
 class alignas(64) PairSplit {
  public:
-  void reset() { v_.store(kUnset, std::memory_order_relaxed); }
   void init(std::uint32_t b, std::uint32_t e) {
     std::uint64_t unset = kUnset;
     v_.compare_exchange_strong(unset, pack(b, e), std::memory_order_acq_rel);

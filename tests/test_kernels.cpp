@@ -511,7 +511,6 @@ TEST_CASE("pair split: two contiguous runs that cover the items once, the held-u
   for (std::uint32_t n : {0u, 1u, 2u, 5u, 97u, 1000u}) {
     for (int held : {-1, 0, 1}) {
       PairSplit split;
-      split.reset();
       std::vector<int> owner(n, -1);
       std::atomic<bool> other_done{false};
 #pragma omp parallel num_threads(2)
