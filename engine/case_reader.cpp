@@ -15,7 +15,14 @@ const Quantity kAcceleration{"acceleration", {{"m_s2", 1.0}}};
 const Quantity kSpecificHeat{"specific heat", {{"J_kgK", 1.0}}};
 const Quantity kConductivity{"thermal conductivity", {{"W_mK", 1.0}}};
 const Quantity kTemperature{"temperature", {{"K", 1.0}}};
+const Quantity kViscosity{"viscosity", {{"Pa_s", 1.0}}};
 const Quantity kDimensionless{"number", {}};
+
+namespace {
+// the quantities with suffixes, for has() and stem()
+const Quantity* const kSuffixed[] = {&kLength,       &kTime,         &kVelocity,       &kStress,     &kDensity,
+                                     &kAcceleration, &kSpecificHeat, &kConductivity, &kTemperature, &kViscosity};
+}  // namespace
 
 std::string format_number(double v, int digits) {
   std::ostringstream s;
@@ -117,8 +124,7 @@ const toml::node* CaseReader::find(const std::string& key) {
 
 bool CaseReader::has(const std::string& key) const {
   if (t_->get(key)) return true;
-  for (const Quantity* q : {&kLength, &kTime, &kVelocity, &kStress, &kDensity, &kAcceleration, &kSpecificHeat,
-                            &kConductivity, &kTemperature})
+  for (const Quantity* q : kSuffixed)
     for (const auto& [suf, f] : q->suffixes)
       if (t_->get(key + "_" + suf)) return true;
   return false;
@@ -349,8 +355,7 @@ bool CaseReader::used(const std::string& key) const {
 }
 
 std::string CaseReader::stem(const std::string& key) {
-  for (const Quantity* q : {&kLength, &kTime, &kVelocity, &kStress, &kDensity, &kAcceleration, &kSpecificHeat,
-                            &kConductivity, &kTemperature})
+  for (const Quantity* q : kSuffixed)
     for (const auto& [suf, f] : q->suffixes) {
       const std::string tail = std::string("_") + suf;
       if (key.size() > tail.size() && key.compare(key.size() - tail.size(), tail.size(), tail) == 0)

@@ -28,7 +28,7 @@ struct Quantity {
   std::vector<std::pair<const char*, double>> suffixes;  // first = canonical SI suffix
 };
 extern const Quantity kLength, kTime, kVelocity, kStress, kDensity, kAcceleration, kSpecificHeat,
-    kConductivity, kTemperature, kDimensionless;
+    kConductivity, kTemperature, kViscosity, kDimensionless;
 
 class CaseReader {
  public:

@@ -20,7 +20,7 @@
 // Units of case-file quantities (engine/case_reader.hpp).
 namespace smpm {
 struct Quantity;
-extern const Quantity kVelocity, kStress;
+extern const Quantity kVelocity, kStress, kViscosity;
 }  // namespace smpm
 
 namespace SMPM_NS {
@@ -89,18 +89,22 @@ struct ElasticStrengthModel {
   kern::ElasticStrength part(const ElasticConstants& c) const { return {c.shear_modulus()}; }
 };
 
-// von Mises with linear isotropic hardening, Y = Y0 + H eps_p.
+// von Mises with linear isotropic hardening and an optional flow viscosity: flow stress
+// Y0 + H eps_p + 3 eta d(eps_p)/dt (kern::VonMisesStrength); eta = 0, the default, is
+// rate-independent.
 struct VonMisesModel {
   static constexpr const char* name = "von_mises";
   bool operator==(const VonMisesModel&) const = default;
-  double Y0 = 0.0;  // initial yield stress [Pa]
-  double H = 0.0;   // linear hardening modulus [Pa]
+  double Y0 = 0.0;   // initial yield stress [Pa]
+  double H = 0.0;    // linear hardening modulus [Pa]
+  double eta = 0.0;  // flow viscosity [Pa s]
   template <class Reader>
   void read(Reader& r) {
     Y0 = r.quantity("yield_stress", kStress, 0.0, 1e15);
     H = r.quantity("hardening_modulus", kStress, 0.0, 1e15);
+    eta = r.quantity("flow_viscosity", kViscosity, 0.0, 1e9, 0.0);
   }
-  kern::VonMisesStrength part(const ElasticConstants& c) const { return {c.shear_modulus(), Y0, H}; }
+  kern::VonMisesStrength part(const ElasticConstants& c) const { return {c.shear_modulus(), Y0, H, eta}; }
 };
 
 // ---- the registry: one line per model (the case files' names in this order in messages) -----

@@ -2,7 +2,8 @@
 // strength part (deviatoric stress), passed as template arguments: one loop per pair, no
 // virtual calls per particle. Per particle and step:
 //   volume      V <- V det(I + dt L)
-//   deviator    Jaumann trial step, then the strength part (elastic, radial return, none)
+//   deviator    Jaumann trial step, then the strength part (elastic, radial return with an
+//               optional flow viscosity, none)
 //   viscosity   q = rho l (c_Q l tr(D)^2 - c_L c tr(D)) in compression (optional)
 //   energy      mid-step L: e <- e + dt V0 sigma_old : D / m, sigma_old = s - (P + q) I the
 //               stress the scatter used: exactly the work of the internal forces over the
@@ -231,24 +232,31 @@ struct ElasticStrength {
   }
 };
 
-// von Mises with linear isotropic hardening, radial return: Y = Y0 + H eps_p; a trial state with
-// sqrt(3 J2) > Y flows by d_eps_p = (sqrt(3 J2) - Y) / (3 G + H) and is scaled back onto the
-// hardened surface. The work is the plastic work per unit volume, Y_new d_eps_p.
+// von Mises with linear isotropic hardening and an optional linear flow viscosity (Bingham):
+// the flow stress is Y0 + H eps_p + 3 eta d(eps_p)/dt, eta the shear viscosity of the flowing
+// material [Pa s] (3 eta: the von Mises stress of a Newtonian flow s = 2 eta D is 3 eta times its
+// equivalent strain rate). Radial return, backward Euler: a trial state with sqrt(3 J2) > Y
+// (Y = Y0 + H eps_p) flows by d_eps_p = (sqrt(3 J2) - Y) / (3 G + H + 3 eta / dt) and is scaled
+// back onto the flow stress Y + (H + 3 eta / dt) d_eps_p. The work is the plastic work per unit
+// volume, that flow stress times d_eps_p (the viscous part is dissipated too). eta = 0: the
+// rate-independent law, bitwise.
 struct VonMisesStrength {
   static constexpr bool plastic = true;
   double G = 0.0, Y0 = 0.0, H = 0.0;
+  double eta = 0.0;  // flow viscosity [Pa s]
   double shear_modulus() const { return G; }
   template <int D>
   SMPM_INLINE StrengthResult<D> update(Sym<D> s, StrainRate<D> k, double dt, StrengthState st) const {
     Sym<D> t = jaumann_trial(G, s, k, dt);
     const double q = von_mises(t);
     const double Y = Y0 + H * st.epsp;
+    const double Hv = eta > 0.0 ? H + 3.0 * eta / dt : H;  // the slope of the flow stress in d_eps_p
     // branch-free: an elastic step has deps = 0 and f = 1; the divisions are computed for every
     // point (a division inside a conditional keeps GCC from if-converting the loop)
     const bool flows = q > Y;
-    const double deps_flow = (q - Y) / (3.0 * G + H);
+    const double deps_flow = (q - Y) / (3.0 * G + Hv);
     const double deps = flows ? deps_flow : 0.0;
-    const double Ynew = Y + H * deps;
+    const double Ynew = Y + Hv * deps;
     const double ratio = Ynew / (flows ? q : 1.0);
     const double f = flows ? ratio : 1.0;
     each<Sym<D>::K>([&](auto i) __attribute__((always_inline)) { t[i] *= f; });

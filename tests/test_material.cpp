@@ -336,6 +336,63 @@ TEST_CASE("VonMisesStrength: an elastic step changes only the deviator", "[mater
   CHECK(rel(t[2], 5e6 + 2 * G * dxy + w * (-20e6 - 10e6)) < 1e-14);
 }
 
+// Bingham flow in pure shear, D = diag(d, -d) at a constant d: the equivalent rate
+// r = sqrt(2/3 D:D) = 2 d / sqrt(3) and, with H = 0, dq/dt = 3 G (r - d(eps_p)/dt) where
+// q = Y0 + 3 eta d(eps_p)/dt. Exact: q = 3 G r t up to the yield time t_y = Y0 / (3 G r), then
+// q = Y0 + 3 eta r (1 - exp(-(t - t_y) / tau)), tau = eta / G. Backward Euler reaches the steady
+// flow stress Y0 + 3 eta r at any dt and the transient to first order in dt.
+TEST_CASE("VonMisesStrength with a flow viscosity: Bingham relaxation in pure shear", "[material][plasticity]") {
+  const Material al = aluminium();
+  const double G = al.shear_modulus(), Y0 = vmm(al).Y0, eta = 1e4, tau = eta / G;
+  const double r = Y0 / (12.0 * eta), d = r * std::sqrt(3.0) / 2.0;  // t_y = 4 tau, 3 eta r = Y0 / 4
+  const double ty = Y0 / (3.0 * G * r), over = 3.0 * eta * r;
+  const kern::VonMisesStrength vm{G, Y0, 0.0, eta};
+  // q [Pa] at t_y + tau and t_y + 20 tau, the plastic work [J/m^3] and strain, at steps tau / k
+  struct Run {
+    double q1, q20, work, epsp;
+  };
+  const auto run = [&](int k) {
+    const double dt = tau / k;
+    const long n1 = std::lround((ty + tau) / dt), n20 = std::lround((ty + 20.0 * tau) / dt);
+    double sxx = 0, syy = 0, sxy = 0, epsp = 0;
+    Run out{0, 0, 0, 0};
+    for (long i = 1; i <= n20; ++i) {
+      out.work += update(vm, sxx, syy, sxy, d, -d, 0.0, 0.0, dt, &epsp);
+      if (i == n1) out.q1 = von_mises(sxx, syy, sxy);
+    }
+    out.q20 = von_mises(sxx, syy, sxy);
+    out.epsp = epsp;
+    return out;
+  };
+  const Run a = run(20), b = run(40);
+  // the steady flow stress (relaxed to exp(-20)): 3 eta r above Y0, at any step
+  CHECK(rel(a.q20 - Y0, over * (1.0 - std::exp(-20.0))) < 1e-7);
+  CHECK(rel(b.q20 - Y0, over * (1.0 - std::exp(-20.0))) < 1e-7);
+  // the transient: backward Euler, first order in dt (errors 0.9 and 0.46 % of 3 eta r)
+  const double q1 = Y0 + over * (1.0 - std::exp(-1.0));
+  const double ea = std::fabs(a.q1 - q1) / over, eb = std::fabs(b.q1 - q1) / over;
+  CHECK(ea < 0.01);
+  CHECK(ea / eb > 1.9);
+  CHECK(ea / eb < 2.1);
+  // the work is all dissipated at the flow stress, W = int q d(eps_p): between Y0 and the steady
+  // flow stress times the plastic strain
+  CHECK(b.work > Y0 * b.epsp);
+  CHECK(b.work < (Y0 + over) * b.epsp);
+  // eta = 0 is the rate-independent law, bitwise
+  {
+    const kern::VonMisesStrength v0{G, Y0, 384e6, 0.0}, v1{G, Y0, 384e6};
+    double s0[3] = {0, 0, 0}, s1[3] = {0, 0, 0}, e0 = 0, e1 = 0;
+    for (int i = 0; i < 50; ++i) {
+      const double w0 = update(v0, s0[0], s0[1], s0[2], d, -d, 0.3 * d, 0.1 * d, ty / 4, &e0);
+      const double w1 = update(v1, s1[0], s1[1], s1[2], d, -d, 0.3 * d, 0.1 * d, ty / 4, &e1);
+      CHECK(w0 == w1);
+    }
+    for (int i = 0; i < 3; ++i) CHECK(s0[i] == s1[i]);
+    CHECK(e0 == e1);
+    CHECK(e0 > 0.0);
+  }
+}
+
 // ---- 5. Uniaxial strain through the constitutive update -----------------------------------------
 
 TEST_CASE("Constitutive update of aluminium along a uniaxial-strain compression", "[material][constitutive]") {
@@ -636,6 +693,14 @@ TEST_CASE("Case reader: overrides in another unit, of the model choice, unitless
   CHECK(contains(case_error(minimal_case("base = \"aluminium\"\nyield_stress = 100.0"), tmp.dir), "needs its unit"));
   // base must be a name
   CHECK(contains(case_error(minimal_case("base = 3"), tmp.dir), "materials.al.base"));
+  // the flow viscosity: absent, rate-independent; given in Pa s; negative, refused by name
+  CHECK(vmm(a.materials[0]).eta == 0.0);
+  const Scene v = build_scene(minimal_case("base = \"aluminium\"\nflow_viscosity_Pa_s = 1500.0"), "test", tmp.dir);
+  CHECK(vmm(v.materials[0]).eta == 1500.0);
+  const std::string msg = case_error(minimal_case("base = \"aluminium\"\nflow_viscosity_Pa_s = -1.0"), tmp.dir);
+  INFO(msg);
+  CHECK(contains(msg, "flow_viscosity_Pa_s"));
+  CHECK(contains(msg, "out of range"));
 }
 
 // Every entry of the library (cases/materials.toml) with a Mie-Grueneisen EOS, read through the
