@@ -39,6 +39,17 @@ Variants (library iron otherwise; docs/validation.md says what each one tests):
                 still changes over the run
   wide          a strip 24 void diameters wide instead of 6: each sample holds 4 times the voids,
                 so the seeds' spread (a small sample's porosity varies along y) should shrink
+  visc_1e3, visc_1e4  a flow viscosity (`flow_viscosity_Pa_s`, flow stress Y + 3 eta rate_p) of
+                1e3 and 1e4 Pa s: a pore-collapse time scale. No measured value for iron was
+                found; the shear viscosities measured in shocked aluminium (perturbation decay:
+                500 Pa s at 42 GPa, Liu et al. 2005, Chin. Phys. Lett. 22, 747; 1500, 2800 and
+                3500 Pa s at 42, 78 and 101 GPa, Ma et al. 2011, Chin. Phys. B 20, 068301) are
+                of order 1e3; 1e4 brackets them from above
+  visc_1e3_long  1e3 Pa s and a front run of 40 void diameters: whether the compaction behind
+                the front, spread out by the viscosity, settles within a longer run
+  visc_1e4_r20  1e4 Pa s with voids of radius 20 um at twice the cell size: with a time scale
+                in the model the void size matters (against visc_1e4; without one, scale_r20
+                gives the base to round-off)
 """
 import argparse
 import json
@@ -69,6 +80,12 @@ VARIANTS = [
     ("scale_r20", "r = 20 um at 2 h, no conduction", ["--void-radius-um", "20"], True),
     ("long", "front run of 40 void diameters", ["--front-diameters", "40"], False),
     ("wide", "strip 24 void diameters wide", ["--width-diameters", "24"], False),
+    ("visc_1e3", "flow viscosity 1e3 Pa s", ["--set", "materials.sample.flow_viscosity_Pa_s=1000.0"], False),
+    ("visc_1e4", "flow viscosity 1e4 Pa s", ["--set", "materials.sample.flow_viscosity_Pa_s=10000.0"], False),
+    ("visc_1e3_long", "flow viscosity 1e3 Pa s, front run of 40 void diameters",
+     ["--set", "materials.sample.flow_viscosity_Pa_s=1000.0", "--front-diameters", "40"], False),
+    ("visc_1e4_r20", "flow viscosity 1e4 Pa s, r = 20 um at 2 h",
+     ["--set", "materials.sample.flow_viscosity_Pa_s=10000.0", "--void-radius-um", "20"], True),
 ]
 
 
@@ -122,6 +139,9 @@ def main():
                               "vs_swept_pct": r.get("engine_vs_swept_pct"),
                               "vs_swept_sd_pct": r.get("engine_vs_swept_spread_pct"),
                               "rho_bulk_behind_g_cm3": r.get("behind", {}).get("behind_rho_bulk_g_cm3"),
+                              "measured_rho_g_cm3": r.get("rho_g_cm3"),
+                              "Us_mass_balance_km_s": r.get("behind", {}).get("Us_mass_balance_km_s"),
+                              "Uy_behind_m_s": r.get("behind", {}).get("behind_Uy_m_s"),
                               "T_behind_K": r.get("behind", {}).get("behind_T_K"),
                               "seeds": r.get("by_h", {}).get(f"{h:g}", {}).get("seeds_measured", 0)}
             for r in doc["rows"]}}
@@ -144,6 +164,19 @@ def main():
                          f"({num(x.get('error_pct'), '{:+.1f}')} %; {num(ch, '{:+.1f}')} %; "
                          f"{num(x.get('vs_swept_pct'), '{:+.1f}')} +- {num(x.get('vs_swept_sd_pct'), '{:.1f}')} %)")
         lines.append(f"| {name}: {v['what']} | {v['h_um']:g} | " + " | ".join(cells) + " |")
+    # the state behind the front: bulk density (the measured one beside it), the shock speed that
+    # mass balance gives from it, and the band's velocity in the wall frame (0 behind a steady front)
+    lines += ["", "State behind the front (means over the seeds): bulk density [g/cm^3] (measured); Us from "
+              "mass balance [km/s]; the band's velocity U_y in the wall frame [m/s] (0 behind a steady front; "
+              "negative: still moving toward the wall).", "",
+              "| variant | " + " | ".join(f"row {k}" for k in rows) + " |", "|---|" + "---|" * len(rows)]
+    for name, v in results.items():
+        cells = []
+        for k in rows:
+            x = v["rows"].get(k, {})
+            cells.append(f"{num(x.get('rho_bulk_behind_g_cm3'), '{:.2f}')} ({num(x.get('measured_rho_g_cm3'), '{:.2f}')}); "
+                         f"{num(x.get('Us_mass_balance_km_s'), '{:.3f}')}; {num(x.get('Uy_behind_m_s'), '{:.0f}')}")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
     meas = [f"row {k}: m {base.get(k, {}).get('m', 'n/a')}, up {base.get(k, {}).get('up_km_s', 'n/a')} km/s, "
             f"measured Us {base.get(k, {}).get('measured_Us_km_s', 'n/a')} km/s, compacted Hugoniot "
             f"{num(base.get(k, {}).get('compacted_Us_km_s'), '{:.3f}')} km/s" for k in rows]
