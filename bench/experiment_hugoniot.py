@@ -482,7 +482,7 @@ def write_markdown(path, doc):
         spread = r["engine_Us_spread_km_s"]
         eng = fmt(r["engine_Us_km_s"]) + ("" if spread is None else f" +- {spread:.3f}")
         if r.get("engine_h_um") is not None and r["engine_h_um"] != hs[-1]:
-            eng += f" (h = {r['engine_h_um']:g} um only)"
+            eng += f" (h = {r['engine_h_um']:.3g} um)"
         L.append(f"| {r['index']} | {r['m']:g} | {r['up_km_s']:g} | {r['Us_km_s']:g} | {eng} | {rc} | "
                  f"{fmt(r['compacted_Us_km_s'])} | {pct(r['engine_error_pct'])} | {pct(r['compacted_error_pct'])} | "
                  f"{pct(r.get('engine_vs_swept_pct'))}"
@@ -495,7 +495,8 @@ def write_markdown(path, doc):
              f"{fmt(s['engine_worst_abs_error_pct'], '{:.1f} %')} (row {s['engine_worst_row']}), compacted "
              f"{fmt(s['compacted_worst_abs_error_pct'], '{:.1f} %')} (row {s['compacted_worst_row']}). "
              f"Rows with every run measured: {s['rows_complete']} of {len(doc['rows'])}.\n")
-    L.append(f"State behind the front at h = {fine} um (seed means): measured P and rho from the row; the "
+    L.append(f"State behind the front at h = {fine} um (a row marked with another h above: at that h; seed means): "
+             "measured P and rho from the row; the "
              "engine's from the jump conditions with its Us (P = rho00 Us up, rho = rho00 Us / (Us - up)) and "
              "measured behind the front (longitudinal stress -sigma_yy; bulk density with the pores left open, "
              "and the points' own density); the compacted Hugoniot's. Us from rho bulk behind: "
@@ -566,10 +567,16 @@ def write_chart(path, doc):
                 Line2D([], [], color="k", marker="x", ls="--", lw=0.8, label="fully compacted Hugoniot")]
     ax.set_xlabel("particle velocity up [km/s]")
     ax.set_ylabel("shock velocity Us [km/s]")
-    coarse = [str(r["index"]) for r in doc["rows"] if r.get("engine_h_um") not in (None, doc["h_um"][-1])]
+    # the cell of most rows, and the rows at another (--coarse-rows, or a composed table)
+    by_h = {}
+    for r in doc["rows"]:
+        if r.get("engine_h_um") is not None:
+            by_h.setdefault(r["engine_h_um"], []).append(str(r["index"]))
+    main_h = max(by_h, key=lambda h: (len(by_h[h]), -h)) if by_h else doc["h_um"][-1]
+    others = "; ".join(f"row{'s' if len(v) > 1 else ''} {', '.join(v)}: {h:.3g} um"
+                       for h, v in sorted(by_h.items()) if h != main_h)
     ax.set_title(f"{doc['material']}, {geometry(doc['dim'])}, r = {doc['void_radius_um']:g} um, "
-                 f"h = {doc['h_um'][-1]:g} um"
-                 + (f" (rows {', '.join(coarse)}: {doc['h_um'][0]:g} um)" if coarse else ""), fontsize=10)
+                 f"h = {main_h:.3g} um" + (f" ({others})" if others else ""), fontsize=10)
     ax.grid(alpha=0.3)
     ax.legend(handles=handles, fontsize=8, loc="lower right")
     fig.tight_layout()
