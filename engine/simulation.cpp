@@ -123,7 +123,7 @@ void Simulation::allocate_work_arrays() {
   hist_.resize(static_cast<std::size_t>(omp_get_max_threads()) * geom.num_keys());
   row_force_.assign(kern::kRowSlots * static_cast<std::size_t>(geom.num_lines()), 0.0);
   row_loss_.assign(static_cast<std::size_t>(geom.num_lines()), 0.0);
-  if (cfg_.void_faces == VoidFaces::Separate && cfg_.void_face_merge) node_state_.assign(geom.num_nodes(), 0);
+  if (cfg_.void_faces == VoidFaces::Separate && cfg_.void_face_merge) node_state_.assign(3 * geom.num_nodes(), 0);
   select_.resize(materials_.size());
   for (auto& s : select_) s.fill(0);
   for (std::size_t b = 0; b < body_material_.size(); ++b) select_.at(body_material_[b])[b] = 1;

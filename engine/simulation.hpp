@@ -169,7 +169,7 @@ class Simulation {
   std::vector<double> heat_sink_;       // what the heating gather heats without an energy field (transfer_args)
   std::vector<std::uint32_t> scratch_u_;
   std::vector<std::uint8_t> scratch_b_;
-  std::vector<std::uint8_t> node_state_;  // per node: full / welded (kern::merge_closed_faces)
+  std::vector<std::uint8_t> node_state_;  // three images of a byte per node: full / welded (kern::merge_closed_faces)
   std::vector<double> row_force_, row_loss_;
   Removed removed_;
   std::vector<std::array<std::uint8_t, 256>> select_;  // per material: which bodies use it

@@ -49,14 +49,35 @@ struct MergeParams {
   double lp = 0.25;      // uGIMP half width in cells (Shape::eval)
 };
 
+// out[c] for c < len: the state of the window of N nodes in[c + off[k]], k < N (bit 0 of all,
+// bit 1 of any).
+template <int N>
+inline void window_states(const std::uint8_t* in, const std::ptrdiff_t* off, std::uint8_t* out, int len) {
+#pragma omp simd
+  for (int c = 0; c < len; ++c) {
+    unsigned all = 1u, any = 0u;
+    for (int k = 0; k < N; ++k) {
+      const unsigned v = in[c + off[k]];
+      all &= v;
+      any |= v;
+    }
+    out[c] = static_cast<std::uint8_t>((all & 1u) | (any & 2u));
+  }
+}
+
 // Points [0, n): field[p] > 0 -> 0 where its nodes are all full and one is welded (two fields
 // hold mass there). The grid holds this step's scatter (per field: m, vol; field f at offset
-// f G.fstride) in the nodes of box (every node a point's shape function reaches). Two passes:
-// each node's state (bit 0 full, bit 1 welded) into node_state (g.num_nodes() bytes, indexed by
-// g.node; the box's real columns are written), then each point reads the states of its nodes:
-// 9 bytes instead of 9 nodes times 2 F doubles (four fields: contact phase 1.79 -> 1.61 s on
-// 300 steps of the 5 um case, docs/performance.md). Each point is decided on its
-// own from the grid: race-free and the same for any thread count.
+// f G.fstride) in the nodes of box (every node a point's shape function reaches). First each
+// node's state (bit 0 full, bit 1 welded) into node_state (3 g.num_nodes() bytes, three images
+// indexed by g.node; the box's real columns are written): one byte instead of 2 F doubles per
+// node (four fields: contact phase 1.79 -> 1.61 s on 300 steps of the 5 um case). Then, one axis
+// at a time, each node takes the states of the N nodes from it along that axis (bit 0 of all,
+// bit 1 of any; a periodic axis wraps), from one image into another: after kDim passes a node
+// holds the state of the N^kDim block it is the first corner of, and a point reads one byte, at
+// the first node of its stencil, instead of N^kDim (docs/performance.md). A point with a zero
+// weight (its stencil leaves that node out) reads its nodes one by one, up to the first that is
+// not full. Each point is decided on its own from the grid: race-free and the same for any
+// thread count.
 // Returns the number of points merged.
 template <class Shape>
 std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const GridView& G, const double* const* x,
@@ -90,6 +111,58 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
         node_state[k0 + c] = static_cast<std::uint8_t>(V[c] < full ? 0 : present[c] >= 2 ? 3 : 1);
     }
   }
+  // The blocks: per axis the first nodes a stencil can have (S0..S1) and the nodes read (R0..R1).
+  constexpr int N = Shape::N;
+  std::size_t stride[kDim];
+  int S0[kDim], S1[kDim], R0[kDim], R1[kDim];
+  for (int d = 0; d < kDim; ++d) {
+    stride[d] = g.stride(d);
+    R0[d] = g.periodic(d) ? 0 : b.lo[d];
+    R1[d] = g.periodic(d) ? g.cells(d) - 1 : b.hi[d];
+    S0[d] = g.periodic(d) ? -g.pad : b.lo[d];
+    S1[d] = g.periodic(d) ? g.cells(d) - 1 : b.hi[d] - (N - 1);
+  }
+  const std::uint8_t* in = node_state;  // the node states stay in image 0, the passes alternate 1 and 2
+  std::uint8_t* out = node_state + g.num_nodes();
+  std::uint8_t* spare = out + g.num_nodes();
+  for (int d = 0; d < kDim; ++d) {
+    NodeBox w;  // the nodes this pass writes: blocks on the axes done, lines of N on d
+    for (int e = 0; e < kDim; ++e) {
+      w.lo[e] = e <= d ? S0[e] : R0[e];
+      w.hi[e] = e <= d ? S1[e] : R1[e];
+    }
+    const int wl = w.lines(), cells = g.cells(d);
+    const bool wrap = g.periodic(d);
+    const auto sd = static_cast<std::ptrdiff_t>(stride[d]);
+    const auto wrapped = [&](int j) { return !wrap ? j : j < 0 ? j + cells : j >= cells ? j - cells : j; };
+#pragma omp parallel for schedule(static)
+    for (int r = 0; r < wl; ++r) {
+      const Idx<kDim> i = w.line_start(r);
+      const std::size_t n0 = g.node(i);
+      const int len = w.hi[0] - w.lo[0] + 1;
+      std::ptrdiff_t off[N];  // from a node to the k-th of its window
+      if (d > 0) {  // the same offsets along the whole line
+        for (int k = 0; k < N; ++k) off[k] = (wrapped(i[d] + k) - i[d]) * sd;
+        window_states<N>(in + n0, off, out + n0, len);
+        continue;
+      }
+      // along the line itself: the windows that wrap one by one, the others as one run
+      for (int k = 0; k < N; ++k) off[k] = k;
+      const int c0 = wrap ? std::clamp(-w.lo[0], 0, len) : 0;
+      const int c1 = wrap ? std::clamp(cells - (N - 1) - w.lo[0], c0, len) : len;
+      window_states<N>(in + n0 + c0, off, out + n0 + c0, c1 - c0);
+      for (int c = 0; c < len; ++c) {
+        if (c == c0) c = c1;
+        if (c >= len) break;
+        const int id = w.lo[0] + c;
+        std::ptrdiff_t o[N];
+        for (int k = 0; k < N; ++k) o[k] = wrapped(id + k) - id;
+        window_states<N>(in + n0 + c, o, out + n0 + c, 1);
+      }
+    }
+    in = out;
+    std::swap(out, spare);
+  }
   std::size_t merged = 0;
   const long cnt = static_cast<long>(n);
 #pragma omp parallel for schedule(static) reduction(+ : merged)
@@ -98,20 +171,45 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
     Vec<kDim> u;
     for (int d = 0; d < kDim; ++d) u[d] = (x[d][p] - g.origin(d)) / g.h;
     const Stencil<Shape, kDim> st(u, q.lp);
-    unsigned all = 1u, any = 0u;  // bit 0 of every node's state, bit 1 of any
-    st.for_each([&](const Idx<kDim>& a, int) {
+    bool block = true;  // every weight nonzero, the first node among the blocks'
+    for (int d = 0; d < kDim; ++d) {
+      block = block && st.base[d] >= S0[d] && st.base[d] <= S1[d];
+      for (int a = 0; a < N; ++a) block = block && st.w[d][a] != 0.0;
+    }
+    unsigned s;  // bit 0: every node full, bit 1: one welded
+    if (block) {
       Idx<kDim> i;
+      for (int d = 0; d < kDim; ++d) i[d] = st.base[d];
+      s = in[g.node(i)];
+    } else {
+      // the nodes of nonzero weight one by one, from the node states (image 0); a periodic
+      // axis's ghosts wrapped onto the nodes they stand for (the scatter folded them there)
+      std::size_t node[ipow(N, kDim)];
+      int m = 1;
+      node[0] = 0;
       for (int d = 0; d < kDim; ++d) {
-        if (st.w[d][a[d]] == 0.0) return;  // a node outside the support
-        i[d] = st.base[d] + a[d];
-        // the scatter folded the ghosts onto these
-        if (g.periodic(d)) i[d] = i[d] < 0 ? i[d] + g.cells(d) : i[d] >= g.cells(d) ? i[d] - g.cells(d) : i[d];
+        std::size_t off[N];
+        int len = 0;
+        for (int a = 0; a < N; ++a) {
+          if (st.w[d][a] == 0.0) continue;
+          int i = st.base[d] + a;
+          if (g.periodic(d)) i = i < 0 ? i + g.cells(d) : i >= g.cells(d) ? i - g.cells(d) : i;
+          off[len++] = static_cast<std::size_t>(i + g.pad) * stride[d];
+        }
+        for (int k = m - 1; k >= 0; --k)  // node[k] -> node[k * len + a]: from the last, in place
+          for (int a = len - 1; a >= 0; --a) node[k * len + a] = node[k] + off[a];
+        m *= len;
       }
-      const unsigned s = node_state[g.node(i)];
-      all &= s;
-      any |= s;
-    });
-    if (all & (any >> 1) & 1u) {
+      unsigned any = 0u;
+      int k = 0;
+      for (; k < m; ++k) {
+        const unsigned v = node_state[node[k]];
+        if (!(v & 1u)) break;
+        any |= v;
+      }
+      s = k == m ? 1u | (any & 2u) : 0u;
+    }
+    if ((s & 1u) && (s & 2u)) {
       field[p] = 0;
       ++merged;
     }

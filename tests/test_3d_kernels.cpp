@@ -16,6 +16,7 @@
 #include "kernels/shape.hpp"
 #include "kernels/transfer.hpp"
 #include "tests/bins.hpp"
+#include "tests/merge_check.hpp"
 
 using namespace smpm;
 using namespace smpm::kern;
@@ -206,4 +207,11 @@ TEST_CASE("3D transfers: vector scatter and line gather match the node-by-node s
   check_shape<UGIMP>();
   check_shape<QuadraticBSpline>();
   check_shape<CubicBSpline>();
+}
+
+TEST_CASE("3D merge_closed_faces: the blocks' states give each point what its nodes one by one give", "[unit][porous]") {
+  smpm::test::check_merge_against_nodes<kern::Linear>(11);
+  smpm::test::check_merge_against_nodes<kern::UGIMP>(12);
+  smpm::test::check_merge_against_nodes<kern::QuadraticBSpline>(13);
+  smpm::test::check_merge_against_nodes<kern::CubicBSpline>(14);
 }

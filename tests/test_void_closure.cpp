@@ -14,6 +14,7 @@
 #include "kernels/constitutive.hpp"
 #include "kernels/shape.hpp"
 #include "kernels/void_closure.hpp"
+#include "tests/merge_check.hpp"
 
 using namespace smpm::kern;
 
@@ -168,7 +169,7 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   MergeParams q;
   q.fill = 0.9;
   q.mass_eps = 1e-9;
-  std::vector<std::uint8_t> state(nn, 7);  // node states: every real node is written
+  std::vector<std::uint8_t> state(3 * nn, 7);  // node states, three images: every real node is written
   // points (in cells): 0 anywhere -> merges; 1 next to an unfilled node -> stays; 2 in field 0;
   // 3 where field 1 is absent from every node of its support -> stays; 4 across the periodic seam
   const std::vector<double> x{3.5e-6, 5.5e-6, 3.5e-6, 1.5e-6, 0.1e-6};
@@ -191,6 +192,13 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
   CHECK(int(f2[0]) == 1);
 }
 
+TEST_CASE("merge_closed_faces: the blocks' states give each point what its nodes one by one give", "[unit][porous]") {
+  smpm::test::check_merge_against_nodes<Linear>(1);
+  smpm::test::check_merge_against_nodes<UGIMP>(2);
+  smpm::test::check_merge_against_nodes<QuadraticBSpline>(3);
+  smpm::test::check_merge_against_nodes<CubicBSpline>(4);
+}
+
 TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full counts all fields", "[unit][porous]") {
   GridGeom g;
   g.h = 1e-6;
@@ -211,7 +219,7 @@ TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full 
   MergeParams q;
   q.fill = 0.9;
   q.mass_eps = 1e-9;
-  std::vector<std::uint8_t> state(nn, 7);
+  std::vector<std::uint8_t> state(3 * nn, 7);
   const std::vector<double> x{3.5e-6, 3.5e-6, 3.5e-6}, y{3.5e-6, 3.5e-6, 3.5e-6};
   std::vector<std::uint8_t> field{3, 2, 1};
   CHECK(merge_closed_faces<QuadraticBSpline>(g, g.all_nodes(), G, xy(x.data(), y.data()).data(), field.data(), 3, q, state.data()) == 3);
