@@ -79,14 +79,19 @@ driver's git commit from a run.json provenance), DIR/experiment.md (the table, t
 the worst |Us error| of the engine and of the compacted Hugoniot), DIR/experiment_us_up.png (Us
 against up: measured points, the engine with error bars, the compacted Hugoniot; one colour per
 distention). Runs are cached under DIR/runs/<key> (key: the case text, the overrides and the
-driver binary's hash): a rerun only runs what changed. A failed run is reported, the rest go on,
-and the exit status is 1.
+driver binary's hash): a rerun only runs what changed. A run that was stopped (the harness
+killed, SIGTERM, a full disk) and left a checkpoint continues from it (`shockmpm resume`, bitwise
+the uninterrupted run) instead of starting again; where no checkpoint can be resumed it runs
+from the start. A long experiment should run a copy of the driver (--driver): a rebuilt driver
+has another hash, so its runs have other keys. A failed run is reported, the rest go on, and the
+exit status is 1.
 
 --coarse-rows LIST: rows run at the coarsest h only, for a row whose finest-h runs cost too much
 (the engine's Us of such a row is from the coarsest h, no resolution change is given, and the
 table says so). --quick: one row (the first, or the first of --rows), one seed, the coarsest h. --check PCT: exit 1
 when a row's |Us error| against its measured Us exceeds PCT per cent (tests/experiment_quick.sh).
---dry-run: print the planned runs (strip, end time, particles, steps) and run nothing.
+--dry-run: print the planned runs (strip, end time, particles, steps, cached or resumable) and run
+nothing.
 """
 import argparse
 import csv
@@ -311,6 +316,25 @@ def completed(out):
         return json.load(open(os.path.join(out, "run.json"))).get("status") == "completed"
     except (OSError, ValueError):
         return False
+
+
+def resumable(out):
+    """A run directory that a stopped run left with a checkpoint (`shockmpm resume` can continue it)."""
+    return not completed(out) and bool(glob.glob(os.path.join(out, "checkpoint", "ckpt_*.bin")))
+
+
+def execute(a, path, out, sets):
+    """Runs one case into out: continues a stopped run from its checkpoint, else runs it from the start.
+    Returns the finished process and "resumed" or "ran"."""
+    if resumable(out):
+        p = subprocess.run([a.driver, "resume", out, "--quiet", "--threads", str(a.threads)],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if p.returncode == 0:
+            return p, "resumed"
+        print(f"{out}: `shockmpm resume` failed (exit {p.returncode}: "
+              f"{(p.stderr.strip().splitlines() or [''])[-1]}); running it from the start", flush=True)
+    cmd = [a.driver, "run", path, "--quiet", "--overwrite", "--out", out, "--threads", str(a.threads)] + sets
+    return subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True), "ran"
 
 
 def read_csv(path):
@@ -698,7 +722,7 @@ def main():
             _, parts, steps, err = driver_check(a, path)
             tot += parts * steps
             print(f"| {rec['index']} | {row['m']:g} | {row['up_km_s']:g} | {h:g} | {seed} | {width:g} x {height:g} | "
-                  f"{t_end:.0f} | {parts} | {steps} | {'yes' if completed(out) else 'no'} |" + (f" {err}" if err else ""))
+                  f"{t_end:.0f} | {parts} | {steps} | {'yes' if completed(out) else 'resumes' if resumable(out) else 'no'} |" + (f" {err}" if err else ""))
         print(f"\n{len(plan)} runs, {tot:.3g} particle-steps")
         return 1 if failed else 0
 
@@ -707,9 +731,9 @@ def main():
         label = f"[{k}/{n}] row {rec['index']} (m {row['m']:g}, up {row['up_km_s']:g} km/s) h {h:g} um seed {seed}"
         cached = completed(out)
         t0 = time.time()
+        how = "cached"
         if not cached:
-            cmd = [a.driver, "run", path, "--quiet", "--overwrite", "--out", out, "--threads", str(a.threads)] + sets
-            p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            p, how = execute(a, path, out, sets)
             if p.returncode != 0 and p.stderr.strip():
                 with open(os.path.join(a.out, "runs", os.path.basename(out) + ".stderr"), "w") as f:
                     f.write(p.stderr)
@@ -726,9 +750,9 @@ def main():
             failed.append(label)
             continue
         res.update({"seed": seed, "case": os.path.relpath(path, a.out), "dir": os.path.relpath(out, a.out),
-                    "cached": cached})
+                    "cached": cached, "resumed": how == "resumed"})
         rec["by_h"][f"{h:g}"]["runs"].append(res)
-        print(f"{label}: {'cached' if cached else f'ran in {time.time() - t0:.1f} s'}, Us {res['Us_km_s']:.3f} km/s "
+        print(f"{label}: {'cached' if cached else f'{how} in {time.time() - t0:.1f} s'}, Us {res['Us_km_s']:.3f} km/s "
               f"(measured {row['Us_km_s']:g}, compacted {fmt(res.get('compacted_Us_km_s', math.nan))}), "
               f"porosity {res['porosity']:.4f}", flush=True)
 
