@@ -19,6 +19,24 @@
 
 namespace SMPM_NS::test {
 
+// The merge's grid in the tests: `fields` velocity fields of nn nodes each over the arrays m and
+// vol, and its parameters: a node is full at 0.9 of a cell, a field absent at 1e-9 kg/m or less.
+inline kern::GridView merge_grid(std::vector<double>& m, std::vector<double>& vol, std::size_t nn, int fields) {
+  kern::GridView G{};
+  G.m = m.data();
+  G.vol = vol.data();
+  G.fstride = nn;
+  G.fields = fields;
+  return G;
+}
+inline kern::MergeParams merge_params() {
+  kern::MergeParams q;
+  q.fill = 0.9;
+  q.mass_eps = 1e-9;
+  q.lp = 0.25;
+  return q;
+}
+
 template <class Shape>
 void check_merge_against_nodes(unsigned seed) {
   using namespace kern;
@@ -38,15 +56,8 @@ void check_merge_against_nodes(unsigned seed) {
     vol[k] = (U(rng) < (kDim == 2 ? 0.12 : 0.04) ? 0.5 : 0.95) * cell;
     if (U(rng) < 0.35) m[k + nn] = 1e-3;
   }
-  GridView G{};
-  G.m = m.data();
-  G.vol = vol.data();
-  G.fstride = nn;
-  G.fields = 2;
-  MergeParams q;
-  q.fill = 0.9;
-  q.mass_eps = 1e-9;
-  q.lp = 0.25;
+  const GridView G = merge_grid(m, vol, nn, 2);
+  const MergeParams q = merge_params();
   // points: inside every axis's real nodes with room for the stencil on the axes that do not wrap
   const int n = 4000;
   std::array<std::vector<double>, kDim> x;

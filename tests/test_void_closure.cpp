@@ -161,14 +161,8 @@ TEST_CASE("merge_closed_faces: a point joins field 0 where all its nodes are ful
     m[k] = 1.0, vol[k] = 0.95 * g.h * g.h;
     m[k + nn] = 1e-3, vol[k + nn] = 0.0;
   }
-  GridView G{};
-  G.m = m.data();
-  G.vol = vol.data();
-  G.fstride = nn;
-  G.fields = 2;
-  MergeParams q;
-  q.fill = 0.9;
-  q.mass_eps = 1e-9;
+  const GridView G = smpm::test::merge_grid(m, vol, nn, 2);
+  const MergeParams q = smpm::test::merge_params();
   std::vector<std::uint8_t> state(3 * nn, 7);  // node states, three images: every real node is written
   // points (in cells): 0 anywhere -> merges; 1 next to an unfilled node -> stays; 2 in field 0;
   // 3 where field 1 is absent from every node of its support -> stays; 4 across the periodic seam
@@ -211,14 +205,8 @@ TEST_CASE("merge_closed_faces, four fields: any field but 0 joins field 0; full 
     m[k + 2 * nn] = 1.0, vol[k + 2 * nn] = 0.5 * g.h * g.h;
     m[k + 3 * nn] = 1.0, vol[k + 3 * nn] = 0.45 * g.h * g.h;
   }
-  GridView G{};
-  G.m = m.data();
-  G.vol = vol.data();
-  G.fstride = nn;
-  G.fields = 4;
-  MergeParams q;
-  q.fill = 0.9;
-  q.mass_eps = 1e-9;
+  const GridView G = smpm::test::merge_grid(m, vol, nn, 4);
+  const MergeParams q = smpm::test::merge_params();
   std::vector<std::uint8_t> state(3 * nn, 7);
   const std::vector<double> x{3.5e-6, 3.5e-6, 3.5e-6}, y{3.5e-6, 3.5e-6, 3.5e-6};
   std::vector<std::uint8_t> field{3, 2, 1};
