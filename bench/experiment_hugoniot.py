@@ -2,7 +2,7 @@
 """The engine against measured porous Hugoniots: one run per row of a data file, seed and cell size.
 
   /usr/bin/python3 bench/experiment_hugoniot.py [--data bench/data/porous_iron_hugoniot.csv]
-      [--out DIR] [--dim 2|3] [--h 4,2] [--seeds 3] [--void-radius-um 10] [--material iron]
+      [--out DIR] [--dim 2|3] [--h 4,2] [--seeds 3 | --seeds 2,3] [--void-radius-um 10] [--material iron]
       [--rows 0,3] [--coarse-rows 8] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
       [--quick] [--check PCT] [--dry-run]
 
@@ -16,7 +16,8 @@ The data file: CSV, comment lines start with '#', columns
   source       where the row comes from (text)
 Any file with these columns runs; a missing column or a bad value is an error naming it.
 
-Per row, seed (1..--seeds) and cell size (--h), a case is written to DIR/cases/ and run:
+Per row, seed (1..N for --seeds N, or the seeds a comma-separated --seeds lists) and cell size
+(--h), a case is written to DIR/cases/ and run:
   sample   a strip periodic in x (width 6 void diameters, --width-diameters, rounded up to a
            multiple of every h; --dim 3: a column periodic in x and z, that width along both, with
            spherical voids instead of cylindrical ones) on a frictionless (slip) wall at y = 0,
@@ -165,6 +166,13 @@ def read_data(path):
     if not rows:
         raise DataError(f"{path}: no data rows")
     return rows
+
+
+def seed_text(doc):
+    """"3 seed(s)" for seeds 1..3, else the seeds by number (older reports: the count)."""
+    seeds = doc.get("seed_list") or list(range(1, doc["seeds"] + 1))
+    return f"{len(seeds)} seed(s)" if seeds == list(range(1, len(seeds) + 1)) else \
+        f"{len(seeds)} seed(s): {', '.join(map(str, seeds))}"
 
 
 def parse_list(text, kind, name):
@@ -486,7 +494,7 @@ def write_markdown(path, doc):
     L.append(f"Data: `{doc['data']}`; material `{doc['material']}`"
              + (f" with {', '.join('`' + s + '`' for s in doc['sets'])}" if doc["sets"] else "")
              + f"; voids of radius {doc['void_radius_um']:g} um; h = {', '.join(f'{h:g}' for h in hs)} um; "
-             f"{doc['seeds']} seed(s); {geometry(doc['dim'])}. Engine commit {doc['git_commit'] or 'n/a'}"
+             f"{seed_text(doc)}; {geometry(doc['dim'])}. Engine commit {doc['git_commit'] or 'n/a'}"
              + (" (dirty)" if doc.get("git_dirty") == "true" else "") + ".\n")
     L.append(f"Command: `{doc['command']}`\n")
     L.append(f"Us in the frame of the unshocked sample (the wall-frame front speed + up). Engine Us: mean "
@@ -617,7 +625,8 @@ def main():
     ap.add_argument("--dim", type=int, default=2,
                     help="2: a strip in plane strain, cylindrical voids; 3: a square column, spherical voids")
     ap.add_argument("--h", default="4,2", help="cell sizes [um], comma-separated (the last, finest, is reported)")
-    ap.add_argument("--seeds", type=int, default=3, help="void seeds per row and h (1..N)")
+    ap.add_argument("--seeds", default="3",
+                    help="void seeds per row and h: N (seeds 1..N) or a comma-separated list (e.g. 2,3)")
     ap.add_argument("--void-radius-um", type=float, default=10.0, help="void radius [um]")
     ap.add_argument("--front-diameters", type=float, default=15.0,
                     help="the compacted front's run [void diameters] that sets the end time")
@@ -644,8 +653,11 @@ def main():
         a.hs = sorted(parse_list(a.h, float, "--h"), reverse=True)
         if any(not h > 0.0 for h in a.hs):
             raise DataError(f"--h {a.h}: cell sizes must be positive [um]")
-        if a.seeds < 1:
-            raise DataError(f"--seeds {a.seeds}: at least 1")
+        seeds = parse_list(a.seeds, int, "--seeds")
+        a.seed_list = seeds if "," in a.seeds else list(range(1, seeds[0] + 1)) if seeds else []
+        if not a.seed_list or min(a.seed_list) < 1 or len(set(a.seed_list)) != len(a.seed_list):
+            raise DataError(f"--seeds {a.seeds}: a count of at least 1, or distinct seeds of at least 1")
+        a.seeds = len(a.seed_list)
         if not a.void_radius_um > 0.0:
             raise DataError(f"--void-radius-um {a.void_radius_um:g}: must be positive")
         if not a.width_diameters > 0.0:
@@ -673,7 +685,7 @@ def main():
             raise DataError(f"--coarse-rows {','.join(map(str, a.coarse_rows))}: row(s) "
                             f"{', '.join(map(str, bad))} are not among the rows run")
         if a.quick:
-            idx, a.hs, a.seeds = idx[:1], a.hs[:1], 1
+            idx, a.hs, a.seeds, a.seed_list = idx[:1], a.hs[:1], 1, a.seed_list[:1]
         a.step = common_step(a.hs)
     except DataError as e:
         print(f"error: {e}", file=sys.stderr)
@@ -707,7 +719,7 @@ def main():
             if i in a.coarse_rows and h != a.hs[0]:
                 continue
             rec["by_h"][f"{h:g}"] = {"runs": []}
-            for seed in range(1, a.seeds + 1):
+            for seed in a.seed_list:
                 text = case_text(row, i, a, h, seed, width, height, t_end)
                 path = os.path.join(a.out, "cases", f"row{i}-h{h:g}-seed{seed}.toml")
                 with open(path, "w") as f:
@@ -813,7 +825,7 @@ def main():
            "driver": os.path.relpath(a.driver, ROOT) if a.driver.startswith(ROOT + os.sep) else os.path.basename(a.driver),
            "driver_sha1": _DRIVER_HASH.get(a.driver, ""), "git_commit": commit,
            "git_dirty": dirty, "dim": a.dim, "material": a.material, "sets": a.set,
-           "void_radius_um": r, "h_um": a.hs, "seeds": a.seeds, "threads": a.threads, "quick": a.quick,
+           "void_radius_um": r, "h_um": a.hs, "seeds": a.seeds, "seed_list": a.seed_list, "threads": a.threads, "quick": a.quick,
            "frame": "Us = wall-frame front speed + up: in the wall frame (the symmetry plane of a symmetric "
                     "impact) the unshocked sample moves at -up and the shocked material is at rest; adding +up "
                     "gives the frame of the unshocked sample, where the shocked material moves at +up",

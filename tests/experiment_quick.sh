@@ -18,7 +18,7 @@
 # this small holds 47-48 voids. TOL3 = 18 %: seed 1's error plus that spread. A lost frame change
 # is -35 % and fails. Then the 2D row once more, stopped by SIGKILL after its first checkpoint
 # and run again: the harness resumes it, and its Us is the uninterrupted run's to the last bit.
-# Release only.
+# Last, a dry run with --seeds 2,3 plans those two seeds. Release only.
 #   tests/experiment_quick.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"
@@ -48,6 +48,10 @@ us = [json.load(open(f))["rows"][0]["by_h"]["4"]["runs"][0]["Us_km_s"] for f in 
 if us[0] != us[1]:
     sys.exit(f"experiment_quick: the resumed run's Us {us[1]!r} km/s differs from the uninterrupted {us[0]!r}")
 PY
+# --seeds as a list plans those seeds only (a dry run: nothing runs)
+plan=$("${HARNESS[@]}" --out "$TMP/plan" --rows "$ROW" --h 4 --seeds 2,3 --dry-run 2>&1)
+[ "$(echo "$plan" | grep -cE '^\| 3 \| [^|]+ \| [^|]+ \| 4 \| (2|3) \|')" = 2 ] && [ "$(echo "$plan" | grep -c '^| 3 |')" = 2 ] ||
+  { echo "experiment_quick: --seeds 2,3 planned otherwise:"; echo "$plan"; rc=1; }
 for f in experiment.json experiment.md experiment_us_up.png 3d/experiment.json; do
   [ -s "$TMP/$f" ] || { echo "experiment_quick: $f missing"; rc=1; }
 done
