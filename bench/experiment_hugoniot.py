@@ -654,7 +654,7 @@ def main():
         if any(not h > 0.0 for h in a.hs):
             raise DataError(f"--h {a.h}: cell sizes must be positive [um]")
         seeds = parse_list(a.seeds, int, "--seeds")
-        a.seed_list = seeds if "," in a.seeds else list(range(1, seeds[0] + 1)) if seeds else []
+        a.seed_list = seeds if "," in a.seeds else list(range(1, seeds[0] + 1))
         if not a.seed_list or min(a.seed_list) < 1 or len(set(a.seed_list)) != len(a.seed_list):
             raise DataError(f"--seeds {a.seeds}: a count of at least 1, or distinct seeds of at least 1")
         a.seeds = len(a.seed_list)

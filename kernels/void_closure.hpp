@@ -113,6 +113,11 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
   }
   // The blocks: per axis the first nodes a stencil can have (S0..S1) and the nodes read (R0..R1).
   constexpr int N = Shape::N;
+  // node j of axis d, a periodic axis's ghosts wrapped onto the nodes they stand for (the scatter
+  // folded them there)
+  const auto wrapped = [&g](int d, int j) {
+    return !g.periodic(d) ? j : j < 0 ? j + g.cells(d) : j >= g.cells(d) ? j - g.cells(d) : j;
+  };
   std::size_t stride[kDim];
   int S0[kDim], S1[kDim], R0[kDim], R1[kDim];
   for (int d = 0; d < kDim; ++d) {
@@ -134,7 +139,6 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
     const int wl = w.lines(), cells = g.cells(d);
     const bool wrap = g.periodic(d);
     const auto sd = static_cast<std::ptrdiff_t>(stride[d]);
-    const auto wrapped = [&](int j) { return !wrap ? j : j < 0 ? j + cells : j >= cells ? j - cells : j; };
 #pragma omp parallel for schedule(static)
     for (int r = 0; r < wl; ++r) {
       const Idx<kDim> i = w.line_start(r);
@@ -142,7 +146,7 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
       const int len = w.hi[0] - w.lo[0] + 1;
       std::ptrdiff_t off[N];  // from a node to the k-th of its window
       if (d > 0) {  // the same offsets along the whole line
-        for (int k = 0; k < N; ++k) off[k] = (wrapped(i[d] + k) - i[d]) * sd;
+        for (int k = 0; k < N; ++k) off[k] = (wrapped(d, i[d] + k) - i[d]) * sd;
         window_states<N>(in + n0, off, out + n0, len);
         continue;
       }
@@ -156,7 +160,7 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
         if (c >= len) break;
         const int id = w.lo[0] + c;
         std::ptrdiff_t o[N];
-        for (int k = 0; k < N; ++k) o[k] = wrapped(id + k) - id;
+        for (int k = 0; k < N; ++k) o[k] = wrapped(0, id + k) - id;
         window_states<N>(in + n0 + c, o, out + n0 + c, 1);
       }
     }
@@ -182,8 +186,7 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
       for (int d = 0; d < kDim; ++d) i[d] = st.base[d];
       s = in[g.node(i)];
     } else {
-      // the nodes of nonzero weight one by one, from the node states (image 0); a periodic
-      // axis's ghosts wrapped onto the nodes they stand for (the scatter folded them there)
+      // the nodes of nonzero weight one by one, from the node states (image 0)
       std::size_t node[ipow(N, kDim)];
       int m = 1;
       node[0] = 0;
@@ -192,9 +195,7 @@ std::size_t merge_closed_faces(const GridGeom& g, const NodeBox& box, const Grid
         int len = 0;
         for (int a = 0; a < N; ++a) {
           if (st.w[d][a] == 0.0) continue;
-          int i = st.base[d] + a;
-          if (g.periodic(d)) i = i < 0 ? i + g.cells(d) : i >= g.cells(d) ? i - g.cells(d) : i;
-          off[len++] = static_cast<std::size_t>(i + g.pad) * stride[d];
+          off[len++] = static_cast<std::size_t>(wrapped(d, st.base[d] + a) + g.pad) * stride[d];
         }
         for (int k = m - 1; k >= 0; --k)  // node[k] -> node[k * len + a]: from the last, in place
           for (int a = len - 1; a >= 0; --a) node[k * len + a] = node[k] + off[a];
