@@ -5,6 +5,7 @@
       [--out DIR] [--dim 2|3] [--h 4,2] [--seeds 3 | --seeds 2,3] [--void-radius-um 10] [--material iron]
       [--rows 0,3] [--coarse-rows 8] [--set KEY=VALUE ...] [--driver build/shockmpm] [--threads 2]
       [--quick] [--check PCT] [--dry-run]
+  /usr/bin/python3 bench/experiment_hugoniot.py --compose A/experiment.json B/experiment.json ... --out DIR
 
 The data file: CSV, comment lines start with '#', columns
   m            distention rho_solid / rho00 [-] (porosity 1 - 1/m)
@@ -93,6 +94,13 @@ table says so). --quick: one row (the first, or the first of --rows), one seed, 
 when a row's |Us error| against its measured Us exceeds PCT per cent (tests/experiment_quick.sh).
 --dry-run: print the planned runs (strip, end time, particles, steps, cached or resumable) and run
 nothing.
+
+--compose JSON ...: run nothing; write one report (the three outputs above) into --out from the
+experiment.json of several runs of the harness on one experiment (the same data file, dimension,
+material, overrides and void radius; another is an error naming the key): rows run at another
+cell or with more seeds in a later run join the table. Per row, h and seed the run of the last
+report that has one counts; a row's engine Us is from its finest h with runs, its resolution
+change against the next coarser h with runs. The report lists its sources' commands.
 """
 import argparse
 import csv
@@ -486,9 +494,81 @@ def clean(o):
     return o
 
 
+def finish_rows(rows_out, cells):
+    """Per row of rows_out: at each h the seeds' mean and spread of Us, of the compacted Hugoniot's
+    Us and of the engine against the swept porosity; at the row's reported h (cells(rec) ->
+    (h, (h1, h2) or None), the pair for the resolution change) the engine's Us, its errors and the
+    state behind the front. Returns the summary over the rows (mean and worst |Us error|) and the
+    runs' (git commit, dirty) pairs in order of first appearance."""
+    commits = []
+    for rec in rows_out:
+        for hh in rec["by_h"].values():
+            us = [x["Us_km_s"] for x in hh["runs"]]
+            hh["Us_km_s_mean"], hh["Us_km_s_std"] = mean_std(us)
+            hh["compacted_Us_km_s_mean"], _ = mean_std([x.get("compacted_Us_km_s", math.nan) for x in hh["runs"]])
+            hh["seeds_measured"] = len(us)
+            hh["vs_swept_pct_mean"], hh["vs_swept_pct_std"] = mean_std(
+                [100.0 * (x["Us_km_s"] / x["compacted_swept_Us_km_s"] - 1.0) for x in hh["runs"]
+                 if math.isfinite(x.get("compacted_swept_Us_km_s", math.nan))])
+            for x in hh["runs"]:
+                if (x["git_commit"], x["git_dirty"]) not in commits:
+                    commits.append((x["git_commit"], x["git_dirty"]))
+        h_row, pair = cells(rec)
+        fine = rec["by_h"].get(f"{h_row:g}", {"runs": []})
+        ok = bool(fine["runs"])
+        rec["engine_h_um"] = h_row
+        rec["engine_Us_km_s"] = fine.get("Us_km_s_mean", math.nan) if ok else math.nan
+        rec["engine_Us_spread_km_s"] = fine.get("Us_km_s_std", math.nan) if ok else math.nan
+        rec["compacted_Us_km_s"] = fine.get("compacted_Us_km_s_mean", math.nan) if ok else math.nan
+        rec["engine_error_pct"] = 100.0 * (rec["engine_Us_km_s"] / rec["Us_km_s"] - 1.0)
+        rec["engine_vs_swept_pct"] = fine.get("vs_swept_pct_mean", math.nan) if ok else math.nan
+        rec["engine_vs_swept_spread_pct"] = fine.get("vs_swept_pct_std", math.nan) if ok else math.nan
+        rec["compacted_error_pct"] = 100.0 * (rec["compacted_Us_km_s"] / rec["Us_km_s"] - 1.0)
+        rec["resolution_change_pct"] = math.nan
+        if pair:
+            u1 = rec["by_h"].get(f"{pair[0]:g}", {}).get("Us_km_s_mean", math.nan)
+            u2 = rec["engine_Us_km_s"]
+            rec["resolution_change_pct"] = 100.0 * abs(u1 - u2) / u2
+            rec["resolution_h_um"] = list(pair)
+        keys = ["Us_mass_balance_km_s", "Us_momentum_km_s", "P_jump_GPa", "rho_jump_g_cm3", "behind_P_long_GPa", "behind_p_GPa", "behind_rho_bulk_g_cm3",
+                "behind_rho_points_g_cm3", "behind_Uy_m_s", "behind_T_K", "compacted_P_GPa", "compacted_rho_g_cm3",
+                "porosity", "swept_porosity", "compacted_swept_Us_km_s", "rho0_library_g_cm3", "rho00_engine_g_cm3"]
+        rec["behind"] = {k: mean_std([x.get(k, math.nan) for x in fine["runs"]])[0] for k in keys}
+        rho_lib = rec["behind"]["rho0_library_g_cm3"]
+        if math.isfinite(rho_lib):
+            want = rec["rho00_g_cm3"] * rec["m"]
+            if abs(rho_lib / want - 1.0) * 100.0 > DENSITY_NOTE_PCT:
+                rec["density_note"] = (f"the library's dense density {rho_lib:.4f} g/cm^3 differs from the row's "
+                                       f"rho00 x m = {want:.4f} g/cm^3 ({100 * (rho_lib / want - 1):+.1f} %); the "
+                                       f"sample's porosity follows m, its rho00 is {rho_lib / rec['m']:.4f} g/cm^3")
+    done = [x for x in rows_out if not x["failed_runs"] and math.isfinite(x["engine_error_pct"])]
+    eng = [abs(x["engine_error_pct"]) for x in done]
+    cmp_ = [abs(x["compacted_error_pct"]) for x in done if math.isfinite(x["compacted_error_pct"])]
+    return {
+        "rows_complete": len(done),
+        "engine_mean_abs_error_pct": float(np.mean(eng)) if eng else math.nan,
+        "engine_worst_abs_error_pct": max(eng) if eng else math.nan,
+        "engine_worst_row": max(done, key=lambda x: abs(x["engine_error_pct"]))["index"] if done else None,
+        "compacted_mean_abs_error_pct": float(np.mean(cmp_)) if cmp_ else math.nan,
+        "compacted_worst_abs_error_pct": max(cmp_) if cmp_ else math.nan,
+        "compacted_worst_row": max(done, key=lambda x: abs(x["compacted_error_pct"]))["index"] if cmp_ else None,
+    }, commits
+
+
+def reported_h(doc):
+    """The cell of most rows' engine Us [um] (ties: the finer); --coarse-rows and composed reports
+    have rows at other cells, which the table and the chart mark."""
+    by_h = {}
+    for r in doc["rows"]:
+        if r.get("engine_h_um") is not None:
+            by_h.setdefault(r["engine_h_um"], []).append(str(r["index"]))
+    return (max(by_h, key=lambda h: (len(by_h[h]), -h)) if by_h else doc["h_um"][-1]), by_h
+
+
 def write_markdown(path, doc):
     hs = doc["h_um"]
-    fine = f"{hs[-1]:g}"
+    main_h = reported_h(doc)[0]
+    fine = f"{main_h:.3g}"
     L = []
     L.append("# Porous Hugoniot: engine against measurements\n")
     L.append(f"Data: `{doc['data']}`; material `{doc['material']}`"
@@ -497,9 +577,16 @@ def write_markdown(path, doc):
              f"{seed_text(doc)}; {geometry(doc['dim'])}. Engine commit {doc['git_commit'] or 'n/a'}"
              + (" (dirty)" if doc.get("git_dirty") == "true" else "") + ".\n")
     L.append(f"Command: `{doc['command']}`\n")
+    if doc.get("sources"):
+        L.append("Composed of these reports (per row, h and seed the run of the last report that has one; "
+                 "a row's engine Us from its finest h):\n")
+        for src in doc["sources"]:
+            L.append(f"- `{src['report']}`: `{src['command']}` (engine {src['git_commit'][:7] or 'n/a'}"
+                     + (", dirty" if src.get("git_dirty") == "true" else "") + ")")
+        L.append("")
     L.append(f"Us in the frame of the unshocked sample (the wall-frame front speed + up). Engine Us: mean "
              f"+- sample standard deviation over seeds at h = {fine} um; resolution change "
-             f"|Us(h1) - Us(h2)| / Us(h2) between the two finest h (converged within {CONVERGED_PCT:g} %: "
+             f"|Us(h1) - Us(h2)| / Us(h2) between the row's two finest h (converged within {CONVERGED_PCT:g} %: "
              f"yes / no); compacted: the fully compacted Rankine-Hugoniot Us of the same EOS at each "
              f"sample's porosity (no strength, fully dense behind the front). Errors: model / measured - 1. "
              f"Engine against swept: each run's Us against the compacted Hugoniot at the porosity of the "
@@ -510,10 +597,12 @@ def write_markdown(path, doc):
     L.append("|---|---|---|---|---|---|---|---|---|---|")
     for r in doc["rows"]:
         res = r["resolution_change_pct"]
-        rc = "n/a" if res is None else f"{res:.1f} % ({'yes' if res <= CONVERGED_PCT else 'no'})"
+        pair = r.get("resolution_h_um")
+        rc = "n/a" if res is None else f"{res:.1f} % ({'yes' if res <= CONVERGED_PCT else 'no'}" + (
+            f"; h {pair[0]:.3g} -> {pair[1]:.3g} um)" if pair and f"{pair[1]:.3g}" != fine else ")")
         spread = r["engine_Us_spread_km_s"]
         eng = fmt(r["engine_Us_km_s"]) + ("" if spread is None else f" +- {spread:.3f}")
-        if r.get("engine_h_um") is not None and r["engine_h_um"] != hs[-1]:
+        if r.get("engine_h_um") is not None and math.isfinite(r["engine_h_um"]) and f"{r['engine_h_um']:.3g}" != fine:
             eng += f" (h = {r['engine_h_um']:.3g} um)"
         L.append(f"| {r['index']} | {r['m']:g} | {r['up_km_s']:g} | {r['Us_km_s']:g} | {eng} | {rc} | "
                  f"{fmt(r['compacted_Us_km_s'])} | {pct(r['engine_error_pct'])} | {pct(r['compacted_error_pct'])} | "
@@ -600,11 +689,7 @@ def write_chart(path, doc):
     ax.set_xlabel("particle velocity up [km/s]")
     ax.set_ylabel("shock velocity Us [km/s]")
     # the cell of most rows, and the rows at another (--coarse-rows, or a composed table)
-    by_h = {}
-    for r in doc["rows"]:
-        if r.get("engine_h_um") is not None:
-            by_h.setdefault(r["engine_h_um"], []).append(str(r["index"]))
-    main_h = max(by_h, key=lambda h: (len(by_h[h]), -h)) if by_h else doc["h_um"][-1]
+    main_h, by_h = reported_h(doc)
     others = "; ".join(f"row{'s' if len(v) > 1 else ''} {', '.join(v)}: {h:.3g} um"
                        for h, v in sorted(by_h.items()) if h != main_h)
     ax.set_title(f"{doc['material']}, {geometry(doc['dim'])}, r = {doc['void_radius_um']:g} um, "
@@ -614,6 +699,96 @@ def write_chart(path, doc):
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+# What reports must share to compose: the same measured data, sample rules and material.
+COMPOSE_MATCH = ("data", "dim", "material", "sets", "void_radius_um", "fit_window_fraction_of_end_time",
+                 "behind_band_fraction_of_front")
+
+
+def compose(paths, out, command):
+    """One report from several experiment.json of one experiment (--compose): per row, h and seed
+    the run of the last report that has one; a row's engine Us from its finest h with runs, the
+    resolution change against the next coarser h with runs. Returns the doc."""
+    docs = []
+    for p in paths:
+        try:
+            with open(p) as f:
+                d = json.load(f)
+        except (OSError, ValueError) as e:
+            raise DataError(f"--compose {p}: {e}")
+        missing = [k for k in ("rows", "command", "h_um") + COMPOSE_MATCH if k not in d]
+        if missing:
+            raise DataError(f"--compose {p}: no {', '.join(missing)}: not a report of this harness (experiment.json)")
+        docs.append((p, d))
+    p0, d0 = docs[0]
+    for p, d in docs[1:]:
+        for k in COMPOSE_MATCH:
+            if d[k] != d0[k]:
+                raise DataError(f"--compose {p}: {k} is {d[k]!r} where {p0} has {d0[k]!r}: only reports of one "
+                                "experiment compose")
+    rows, strips = {}, {}
+    for p, d in docs:
+        for r in d["rows"]:
+            rec = rows.setdefault(r["index"], {"index": r["index"], **{k: r[k] for k in COLUMNS},
+                                               "data_line": r["data_line"], "porosity_target": r["porosity_target"],
+                                               "by_h": {}, "failed_runs": []})
+            for k in COLUMNS:
+                if r[k] != rec[k]:
+                    raise DataError(f"--compose {p}: row {r['index']} has {k} = {r[k]!r} where an earlier report "
+                                    f"has {rec[k]!r}")
+            for h, hh in r["by_h"].items():
+                if not hh["runs"]:
+                    continue
+                runs = {x["seed"]: x for x in rec["by_h"].get(h, {"runs": []})["runs"]}
+                for x in hh["runs"]:
+                    runs[x["seed"]] = {**x, "report": p}
+                rec["by_h"][h] = {"runs": [runs[k] for k in sorted(runs)]}
+                strips[(r["index"], h)] = r.get("strip")
+    rows_out = [rows[i] for i in sorted(rows)]
+
+    def cells(rec):  # the finest h with runs, and the next coarser one
+        hs = sorted((float(h) for h in rec["by_h"]), reverse=True)
+        if not hs:
+            return math.nan, None
+        return hs[-1], (hs[-2], hs[-1]) if len(hs) >= 2 else None
+
+    summary, commits = finish_rows(rows_out, cells)
+    for rec in rows_out:
+        if strips.get((rec["index"], f"{rec['engine_h_um']:g}")):
+            rec["strip"] = strips[(rec["index"], f"{rec['engine_h_um']:g}")]
+    seeds = sorted({x["seed"] for rec in rows_out for hh in rec["by_h"].values() for x in hh["runs"]})
+    return {"command": command, "data": d0["data"],
+            "driver": ", ".join(dict.fromkeys(d.get("driver", "") for _, d in docs)),
+            "driver_sha1": ", ".join(dict.fromkeys(d.get("driver_sha1", "") for _, d in docs)),
+            "git_commit": ", ".join(c[:7] + (" (dirty)" if dirty == "true" else "") for c, dirty in commits if c),
+            "git_dirty": "", "dim": d0["dim"], "material": d0["material"], "sets": d0["sets"],
+            "void_radius_um": d0["void_radius_um"],
+            "h_um": sorted({float(h) for rec in rows_out for h in rec["by_h"]}, reverse=True),
+            "seeds": len(seeds), "seed_list": seeds, "threads": d0.get("threads"), "quick": False,
+            "frame": d0.get("frame"), "fit_window_fraction_of_end_time": d0["fit_window_fraction_of_end_time"],
+            "behind_band_fraction_of_front": d0["behind_band_fraction_of_front"],
+            "sources": [{"report": p, "command": d["command"], "git_commit": d.get("git_commit", ""),
+                         "git_dirty": d.get("git_dirty", "")} for p, d in docs],
+            "rows": rows_out, "summary": summary}
+
+
+def write_outputs(out, doc):
+    """DIR/experiment.json, experiment.md and experiment_us_up.png; prints the table. False when
+    the chart failed (the table and the JSON are written first, so that it loses nothing else)."""
+    doc = clean(doc)
+    with open(os.path.join(out, "experiment.json"), "w") as f:
+        json.dump(doc, f, indent=1)
+    write_markdown(os.path.join(out, "experiment.md"), doc)
+    ok = True
+    try:
+        write_chart(os.path.join(out, "experiment_us_up.png"), doc)
+    except Exception as e:  # a chart failure must not lose the table
+        print(f"chart failed: {e}", file=sys.stderr)
+        ok = False
+    print(open(os.path.join(out, "experiment.md")).read())
+    print(f"Wrote {os.path.join(out, 'experiment.json')}, experiment.md, experiment_us_up.png")
+    return ok
 
 
 def main():
@@ -644,9 +819,19 @@ def main():
     ap.add_argument("--check", type=float, default=0.0, metavar="PCT",
                     help="exit 1 when a row's |Us error| against its measured Us exceeds PCT per cent")
     ap.add_argument("--dry-run", action="store_true", help="print the planned runs, run nothing")
+    ap.add_argument("--compose", nargs="+", metavar="JSON",
+                    help="run nothing: one report in --out from these experiment.json of one experiment")
     a = ap.parse_args()
     command = " ".join([os.path.relpath(sys.argv[0], os.getcwd()) if os.path.exists(sys.argv[0]) else sys.argv[0]]
                        + sys.argv[1:])
+    if a.compose:
+        try:
+            doc = compose(a.compose, a.out, command)
+        except DataError as e:
+            print(f"error: {e}", file=sys.stderr)
+            return 2
+        os.makedirs(a.out, exist_ok=True)
+        return 0 if write_outputs(a.out, doc) else 1
     try:
         if a.dim not in (2, 3):
             raise DataError(f"--dim {a.dim}: 2 (plane strain, cylindrical voids) or 3 (spherical voids)")
@@ -768,59 +953,14 @@ def main():
               f"(measured {row['Us_km_s']:g}, compacted {fmt(res.get('compacted_Us_km_s', math.nan))}), "
               f"porosity {res['porosity']:.4f}", flush=True)
 
-    # per row
-    commit, dirty = "", ""
-    for rec in rows_out:
-        for hh in rec["by_h"].values():
-            us = [x["Us_km_s"] for x in hh["runs"]]
-            hh["Us_km_s_mean"], hh["Us_km_s_std"] = mean_std(us)
-            hh["compacted_Us_km_s_mean"], _ = mean_std([x.get("compacted_Us_km_s", math.nan) for x in hh["runs"]])
-            hh["seeds_measured"] = len(us)
-            hh["vs_swept_pct_mean"], hh["vs_swept_pct_std"] = mean_std(
-                [100.0 * (x["Us_km_s"] / x["compacted_swept_Us_km_s"] - 1.0) for x in hh["runs"]
-                 if math.isfinite(x.get("compacted_swept_Us_km_s", math.nan))])
-            for x in hh["runs"]:
-                commit, dirty = commit or x["git_commit"], dirty or x["git_dirty"]
-        h_row = a.hs[0] if rec["index"] in a.coarse_rows else a.hs[-1]
-        fine = rec["by_h"].get(f"{h_row:g}", {"runs": []})
-        ok = bool(fine["runs"])
-        rec["engine_h_um"] = h_row
-        rec["engine_Us_km_s"] = fine.get("Us_km_s_mean", math.nan) if ok else math.nan
-        rec["engine_Us_spread_km_s"] = fine.get("Us_km_s_std", math.nan) if ok else math.nan
-        rec["compacted_Us_km_s"] = fine.get("compacted_Us_km_s_mean", math.nan) if ok else math.nan
-        rec["engine_error_pct"] = 100.0 * (rec["engine_Us_km_s"] / rec["Us_km_s"] - 1.0)
-        rec["engine_vs_swept_pct"] = fine.get("vs_swept_pct_mean", math.nan) if ok else math.nan
-        rec["engine_vs_swept_spread_pct"] = fine.get("vs_swept_pct_std", math.nan) if ok else math.nan
-        rec["compacted_error_pct"] = 100.0 * (rec["compacted_Us_km_s"] / rec["Us_km_s"] - 1.0)
-        rec["resolution_change_pct"] = math.nan
-        if len(a.hs) >= 2 and rec["index"] not in a.coarse_rows:
-            u1 = rec["by_h"].get(f"{a.hs[-2]:g}", {}).get("Us_km_s_mean", math.nan)
-            u2 = rec["engine_Us_km_s"]
-            rec["resolution_change_pct"] = 100.0 * abs(u1 - u2) / u2
-            rec["resolution_h_um"] = [a.hs[-2], a.hs[-1]]
-        keys = ["Us_mass_balance_km_s", "Us_momentum_km_s", "P_jump_GPa", "rho_jump_g_cm3", "behind_P_long_GPa", "behind_p_GPa", "behind_rho_bulk_g_cm3",
-                "behind_rho_points_g_cm3", "behind_Uy_m_s", "behind_T_K", "compacted_P_GPa", "compacted_rho_g_cm3",
-                "porosity", "swept_porosity", "compacted_swept_Us_km_s", "rho0_library_g_cm3", "rho00_engine_g_cm3"]
-        rec["behind"] = {k: mean_std([x.get(k, math.nan) for x in fine["runs"]])[0] for k in keys}
-        rho_lib = rec["behind"]["rho0_library_g_cm3"]
-        if math.isfinite(rho_lib):
-            want = rec["rho00_g_cm3"] * rec["m"]
-            if abs(rho_lib / want - 1.0) * 100.0 > DENSITY_NOTE_PCT:
-                rec["density_note"] = (f"the library's dense density {rho_lib:.4f} g/cm^3 differs from the row's "
-                                       f"rho00 x m = {want:.4f} g/cm^3 ({100 * (rho_lib / want - 1):+.1f} %); the "
-                                       f"sample's porosity follows m, its rho00 is {rho_lib / rec['m']:.4f} g/cm^3")
-    done = [x for x in rows_out if not x["failed_runs"] and math.isfinite(x["engine_error_pct"])]
-    eng = [abs(x["engine_error_pct"]) for x in done]
-    cmp_ = [abs(x["compacted_error_pct"]) for x in done if math.isfinite(x["compacted_error_pct"])]
-    summary = {
-        "rows_complete": len(done),
-        "engine_mean_abs_error_pct": float(np.mean(eng)) if eng else math.nan,
-        "engine_worst_abs_error_pct": max(eng) if eng else math.nan,
-        "engine_worst_row": max(done, key=lambda x: abs(x["engine_error_pct"]))["index"] if done else None,
-        "compacted_mean_abs_error_pct": float(np.mean(cmp_)) if cmp_ else math.nan,
-        "compacted_worst_abs_error_pct": max(cmp_) if cmp_ else math.nan,
-        "compacted_worst_row": max(done, key=lambda x: abs(x["compacted_error_pct"]))["index"] if cmp_ else None,
-    }
+    # per row: the finest h, a coarse row's coarsest
+    def cells(rec):
+        if rec["index"] in a.coarse_rows:
+            return a.hs[0], None
+        return a.hs[-1], (a.hs[-2], a.hs[-1]) if len(a.hs) >= 2 else None
+    summary, commits = finish_rows(rows_out, cells)
+    commit = next((c for c, _ in commits if c), "")
+    dirty = next((d for _, d in commits if d), "")
     doc = {"command": command, "data": os.path.relpath(os.path.abspath(a.data), ROOT) if os.path.abspath(a.data).startswith(ROOT + os.sep) else a.data,
            "driver": os.path.relpath(a.driver, ROOT) if a.driver.startswith(ROOT + os.sep) else os.path.basename(a.driver),
            "driver_sha1": _DRIVER_HASH.get(a.driver, ""), "git_commit": commit,
@@ -831,17 +971,8 @@ def main():
                     "gives the frame of the unshocked sample, where the shocked material moves at +up",
            "fit_window_fraction_of_end_time": list(WINDOW), "behind_band_fraction_of_front": list(BAND),
            "rows": rows_out, "summary": summary}
-    with open(os.path.join(a.out, "experiment.json"), "w") as f:
-        json.dump(clean(doc), f, indent=1)
-    doc = clean(doc)
-    write_markdown(os.path.join(a.out, "experiment.md"), doc)
-    try:
-        write_chart(os.path.join(a.out, "experiment_us_up.png"), doc)
-    except Exception as e:  # a chart failure must not lose the table
-        print(f"chart failed: {e}", file=sys.stderr)
+    if not write_outputs(a.out, doc):
         failed.append("chart")
-    print(open(os.path.join(a.out, "experiment.md")).read())
-    print(f"Wrote {os.path.join(a.out, 'experiment.json')}, experiment.md, experiment_us_up.png")
     rc = 0
     if failed:
         print(f"{len(failed)} failure(s): " + "; ".join(failed))

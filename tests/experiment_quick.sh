@@ -18,7 +18,8 @@
 # this small holds 47-48 voids. TOL3 = 18 %: seed 1's error plus that spread. A lost frame change
 # is -35 % and fails. Then the 2D row once more, stopped by SIGKILL after its first checkpoint
 # and run again: the harness resumes it, and its Us is the uninterrupted run's to the last bit.
-# Last, a dry run with --seeds 2,3 plans those two seeds. Release only.
+# Then a dry run with --seeds 2,3 plans those two seeds, and --compose joins hand-written
+# reports of the 2D row (below). Release only.
 #   tests/experiment_quick.sh SHOCKMPM SOURCE_DIR
 set -uo pipefail
 EXE="$1"; SRC="$2"
@@ -52,7 +53,40 @@ PY
 plan=$("${HARNESS[@]}" --out "$TMP/plan" --rows "$ROW" --h 4 --seeds 2,3 --dry-run 2>&1)
 [ "$(echo "$plan" | grep -cE '^\| 3 \| [^|]+ \| [^|]+ \| 4 \| (2|3) \|')" = 2 ] && [ "$(echo "$plan" | grep -c '^| 3 |')" = 2 ] ||
   { echo "experiment_quick: --seeds 2,3 planned otherwise:"; echo "$plan"; rc=1; }
-for f in experiment.json experiment.md experiment_us_up.png 3d/experiment.json; do
+# --compose: reports of one experiment become one table. From the 2D run's report, three more of
+# its row written by hand: seed 2 at h = 4 um (Us + 0.2 km/s), seed 1 at h = 4 um again (Us +
+# 0.1: the later report's run replaces the first's) and seed 1 at h = 2 um (Us - 0.1). The
+# composed row takes h = 2 um, the two seeds' mean at h = 4 um for its resolution change; a
+# report of another dimension is refused, naming the key.
+/usr/bin/python3 - "$TMP" "${HARNESS[@]}" <<'PY' || rc=1
+import json, math, subprocess, sys
+tmp, harness = sys.argv[1], sys.argv[2:]
+doc = json.load(open(f"{tmp}/experiment.json"))
+run = doc["rows"][0]["by_h"]["4"]["runs"][0]
+us = run["Us_km_s"]
+paths = [f"{tmp}/experiment.json"]
+for name, h, seed, du in (("b", "4", 2, 0.2), ("c", "4", 1, 0.1), ("d", "2", 1, -0.1)):
+    d = json.loads(json.dumps(doc))
+    d["rows"][0]["by_h"] = {h: {"runs": [dict(run, seed=seed, Us_km_s=us + du)]}}
+    paths.append(f"{tmp}/{name}.json")
+    json.dump(d, open(paths[-1], "w"))
+p = subprocess.run(harness + ["--compose", *paths, "--out", f"{tmp}/composed"], capture_output=True, text=True)
+if p.returncode != 0:
+    sys.exit(f"experiment_quick: --compose failed: {p.stderr}")
+r = json.load(open(f"{tmp}/composed/experiment.json"))["rows"][0]
+want = {"engine_h_um": 2.0, "engine_Us_km_s": us - 0.1,
+        "resolution_change_pct": 100 * abs(us + 0.15 - (us - 0.1)) / (us - 0.1)}
+bad = [k for k, v in want.items() if not math.isclose(r[k], v, rel_tol=1e-12)]
+if bad or [x["seed"] for x in r["by_h"]["4"]["runs"]] != [1, 2]:
+    sys.exit(f"experiment_quick: --compose gave {[(k, r[k]) for k in want]}, seeds at 4 um "
+             f"{[x['seed'] for x in r['by_h']['4']['runs']]}; expected {want}, seeds [1, 2]")
+d = json.loads(json.dumps(doc)); d["dim"] = 3
+json.dump(d, open(f"{tmp}/e.json", "w"))
+p = subprocess.run(harness + ["--compose", paths[0], f"{tmp}/e.json", "--out", f"{tmp}/bad"], capture_output=True, text=True)
+if p.returncode != 2 or "dim" not in p.stderr:
+    sys.exit(f"experiment_quick: --compose of another dimension: exit {p.returncode}, {p.stderr!r}")
+PY
+for f in experiment.json experiment.md experiment_us_up.png 3d/experiment.json composed/experiment.md; do
   [ -s "$TMP/$f" ] || { echo "experiment_quick: $f missing"; rc=1; }
 done
 [ "$rc" = 0 ] && echo "experiment_quick: PASS" || echo "experiment_quick: FAIL (exit $rc)"
