@@ -37,8 +37,9 @@ run() {  # run "SCENE [threads=N] KEY=VALUE ..." LABEL -> M particle-steps/s
   fi
   local sets=()
   for kv in "${args[@]}"; do sets+=(--set "$kv"); done
+  rm -rf "$tmp/run"  # a failed run must not leave the last round's run.json to be read
   OMP_NUM_THREADS=$threads "$drv" run "$root/cases/bench/${spec[0]}.toml" --quiet --set run.max_steps="$steps" "${sets[@]}" --overwrite \
-    --out "$tmp/run" > /dev/null
+    --out "$tmp/run" > /dev/null || { echo "scene_ratio.sh: the run of '$1' failed" >&2; return 1; }
   /usr/bin/python3 - "$tmp/run/run.json" "$rate" "$tmp/phases_$2.txt" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
@@ -52,7 +53,7 @@ else:
 PY
 }
 for i in $(seq "$n"); do
-  ra=$(run "$a" A); rb=$(run "$b" B)
+  ra=$(run "$a" A) && rb=$(run "$b" B) || exit 1
   echo "$i $ra $rb"
 done | tee "$tmp/rounds.txt"
 /usr/bin/python3 - "$tmp/rounds.txt" "$a" "$b" "$OMP_NUM_THREADS" "$rate" <<'PY'
