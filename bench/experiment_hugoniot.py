@@ -98,7 +98,8 @@ nothing.
 --compose JSON ...: run nothing; write one report (the three outputs above) into --out from the
 experiment.json of several runs of the harness on one experiment (the same data file, dimension,
 material, overrides and void radius; another is an error naming the key): rows run at another
-cell or with more seeds in a later run join the table. Per row, h and seed the run of the last
+cell or with more seeds in a later run join the table. No option but --out applies (another is
+an error). Per row, h and seed the run of the last
 report that has one counts; a row's engine Us is from its finest h with runs, its resolution
 change against the next coarser h with runs. The report lists its sources' commands.
 """
@@ -826,6 +827,10 @@ def main():
                        + sys.argv[1:])
     if a.compose:
         try:
+            given = [k for k in vars(a) if k not in ("compose", "out") and getattr(a, k) != ap.get_default(k)]
+            if given:
+                raise DataError(f"--compose runs nothing and takes only --out: --{given[0].replace('_', '-')} "
+                                "does not apply")
             doc = compose(a.compose, a.out, command)
         except DataError as e:
             print(f"error: {e}", file=sys.stderr)

@@ -57,8 +57,8 @@ plan=$("${HARNESS[@]}" --out "$TMP/plan" --rows "$ROW" --h 4 --seeds 2,3 --dry-r
 # its row written by hand: seed 2 at h = 4 um (Us + 0.2 km/s), seed 1 at h = 4 um again (Us +
 # 0.1: the later report's run replaces the first's) and seed 1 at h = 2 um (Us - 0.1). The
 # composed row takes h = 2 um, the two seeds' mean at h = 4 um for its resolution change; a
-# report of another dimension is refused, naming the key.
-/usr/bin/python3 - "$TMP" "${HARNESS[@]}" <<'PY' || rc=1
+# report of another dimension is refused, naming the key, and so is a run option beside it.
+/usr/bin/python3 - "$TMP" /usr/bin/python3 "$SRC/bench/experiment_hugoniot.py" <<'PY' || rc=1
 import json, math, subprocess, sys
 tmp, harness = sys.argv[1], sys.argv[2:]
 doc = json.load(open(f"{tmp}/experiment.json"))
@@ -85,6 +85,9 @@ json.dump(d, open(f"{tmp}/e.json", "w"))
 p = subprocess.run(harness + ["--compose", paths[0], f"{tmp}/e.json", "--out", f"{tmp}/bad"], capture_output=True, text=True)
 if p.returncode != 2 or "dim" not in p.stderr:
     sys.exit(f"experiment_quick: --compose of another dimension: exit {p.returncode}, {p.stderr!r}")
+p = subprocess.run(harness + ["--compose", paths[0], "--rows", "3", "--out", f"{tmp}/bad"], capture_output=True, text=True)
+if p.returncode != 2 or "--rows" not in p.stderr:
+    sys.exit(f"experiment_quick: --compose with --rows: exit {p.returncode}, {p.stderr!r}")
 PY
 for f in experiment.json experiment.md experiment_us_up.png 3d/experiment.json composed/experiment.md; do
   [ -s "$TMP/$f" ] || { echo "experiment_quick: $f missing"; rc=1; }
