@@ -707,7 +707,7 @@ COMPOSE_MATCH = ("data", "dim", "material", "sets", "void_radius_um", "fit_windo
                  "behind_band_fraction_of_front")
 
 
-def compose(paths, out, command):
+def compose(paths, command):
     """One report from several experiment.json of one experiment (--compose): per row, h and seed
     the run of the last report that has one; a row's engine Us from its finest h with runs, the
     resolution change against the next coarser h with runs. Returns the doc."""
@@ -831,7 +831,7 @@ def main():
             if given:
                 raise DataError(f"--compose runs nothing and takes only --out: --{given[0].replace('_', '-')} "
                                 "does not apply")
-            doc = compose(a.compose, a.out, command)
+            doc = compose(a.compose, command)
         except DataError as e:
             print(f"error: {e}", file=sys.stderr)
             return 2
