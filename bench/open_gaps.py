@@ -18,6 +18,9 @@ or --y LO,HI [um]. Prints one markdown row per run:
              pore's read less than its diameter
   <= 1 cell  the share of the uncovered voxels that lie in gaps at most one cell wide (distance
              to the nearest covered voxel at most h / 2)
+  field > 0  the share of the band's points in a void-face field other than field 0 (the side
+             below a void; docs/method.md): as cut, the points next to a void's upper side; a
+             point joins field 0 once its void has closed and welded (contact.void_face_merge)
 
   /usr/bin/python3 bench/open_gaps.py RUN [RUN ...] [--snapshot NAME] [--band 0.1,0.8 | --y LO,HI]
 
@@ -128,6 +131,7 @@ def analyse(run_dir, snapshot, band, y_range):
         pos = f["particles/position"][:, :D] * 1e6
         V = mass_over_rho0 * rho0 / f["particles/density"][:]
         mine = f["particles/body"][:] == 0
+        field = f["particles/field"][:][mine] if "particles/field" in f else None
     pos, V = pos[mine], V[mine]
     if y_range:
         lo_y, hi_y = y_range
@@ -148,7 +152,8 @@ def analyse(run_dir, snapshot, band, y_range):
     img = coverage(pos[near], rad[near], lo, shape, vox, periodic)
     unc = ~img
     res = {"run": run_dir, "t_ns": t, "dim": D, "h_um": h, "band_um": (lo_y, hi_y),
-           "open": open_frac, "uncovered": float(unc.mean())}
+           "open": open_frac, "uncovered": float(unc.mean()),
+           "other_field": float(np.mean(field[in_band] > 0)) if field is not None and in_band.any() else None}
     if unc.any():
         w = 2.0 * distance_to_cover(img, periodic)[unc] * float(vox.mean())
         res["width_um"] = [float(np.percentile(w, q)) for q in (50, 90, 99)]
@@ -172,16 +177,17 @@ def main():
             raise ValueError
     except ValueError:
         sys.exit(f"error: --band {a.band!r} / --y {a.y!r}: two increasing numbers, LO,HI")
-    print("| run | t [ns] | h [um] | band [um] | open | uncovered | width [um] 50 / 90 / 99 % | <= 1 cell |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| run | t [ns] | h [um] | band [um] | open | uncovered | width [um] 50 / 90 / 99 % | <= 1 cell | field > 0 |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for r in a.runs:
         try:
             s = analyse(r, a.snapshot, band, y_range)
         except (OSError, KeyError, ValueError) as e:
             sys.exit(f"error: {r}: {e}")
         w = " / ".join(f"{v:.2f}" for v in s["width_um"])
+        of = "n/a" if s["other_field"] is None else f"{100 * s['other_field']:.0f} %"
         print(f"| {r} | {s['t_ns']:.1f} | {s['h_um']:g} | {s['band_um'][0]:.0f}-{s['band_um'][1]:.0f} | "
-              f"{100 * s['open']:.1f} % | {100 * s['uncovered']:.1f} % | {w} | {100 * s['within_cell']:.0f} % |",
+              f"{100 * s['open']:.1f} % | {100 * s['uncovered']:.1f} % | {w} | {100 * s['within_cell']:.0f} % | {of} |",
               flush=True)
 
 

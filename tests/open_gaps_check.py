@@ -11,7 +11,9 @@ from which columns of points are taken out:
   (2.5 + 7.5) / 40, its widest voxels 7.5 um wide, and under half of the uncovered voxels within
   one cell of width;
 - a band given in um (--y) and as fractions of the front's height (front.csv) reads the same
-  points.
+  points;
+- the points of the columns x >= 20 um in field 1: their share of the band's points, 20 of the
+  slit case's 37 columns.
 
   /usr/bin/python3 tests/open_gaps_check.py SOURCE_DIR
 """
@@ -53,6 +55,7 @@ def run_dir(d, removed):
         f["particles/position"] = np.stack([x, y], 1) * 1e-6
         f["particles/density"] = np.full(len(x), 7850.0)
         f["particles/body"] = np.zeros(len(x), dtype=np.uint8)
+        f["particles/field"] = (x >= 20).astype(np.uint8)
         f["particles"].attrs["time"] = 5e-9
 
 
@@ -64,6 +67,7 @@ with tempfile.TemporaryDirectory() as tmp:
     check(abs(s["uncovered"] - 2.5 / 40) < 0.25 / 40, f"slit: uncovered 0.0625, got {s['uncovered']}")
     check(s["width_um"][2] <= 2.5 + 1e-9, f"slit: at most 2.5 um wide, got {s['width_um']}")
     check(abs(s["within_cell"] - 0.8) < 0.11, f"slit: 80 % within a cell, got {s['within_cell']}")
+    check(abs(s["other_field"] - 20 / 37) < 1e-12, f"slit: field > 0 share 20/37, got {s['other_field']}")
     # the same band as fractions of the front's height (50 um at 5 ns)
     f = open_gaps.analyse(d, "", (0.2, 0.8), None)
     check(f["band_um"] == (10.0, 40.0) and f["open"] == s["open"], f"band from the front: {f['band_um']}")
