@@ -188,7 +188,11 @@ struct Raster {
 // Marks the pixels whose centre lies in a body point's disk (ball), radius * point_size(V_p)
 // capped at rmax. The points run in parallel: disks overlap, and a pixel two threads mark gets
 // the same 1 from both (relaxed atomic byte stores), so the image is the same for any thread
-// count.
+// count. Along a row of pixels (axis 0) the test |e|^2 <= r^2 (e: pixel centre - point, summed
+// in axis order) is monotone in |e_0|, every operation rounding monotonically, so a row's
+// covered pixels are one run: its two ends are found by that test, starting a pixel outside the
+// chord, and the pixels between are marked without it. The image is the one that testing every
+// pixel of the disk's bounding box gives.
 void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius, double rmax) {
   // the raster's geometry in locals: a store into the image (bytes) could alias the members
   const Vector lo = R.lo, step = R.step;
@@ -196,6 +200,7 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
   bool wrap[kDim];
   for (int d = 0; d < kDim; ++d) wrap[d] = R.wrap[d];
   std::uint8_t* img = R.img.data();
+  const double inv0 = 1.0 / step[0];  // the chord's ends need not be exact: a pixel of margin
   const auto np = static_cast<std::ptrdiff_t>(P.size());
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t p = 0; p < np; ++p) {
@@ -212,31 +217,53 @@ void cover_disks(Raster& R, const Particles& P, std::uint8_t body, double radius
         last[d] = std::min(n[d] - 1, last[d]);
       }
     }
-    for_each_index(first, last, [&](const Index& i) {
+    Index row_last = last;  // the rows: axis 0 at its first pixel
+    row_last[0] = first[0];
+    for_each_index(first, row_last, [&](const Index& row) {
       double e[kDim];  // pixel centre - point [m]
-      for (int d = 0; d < kDim; ++d) e[d] = lo[d] + (i[d] + 0.5) * step[d] - c[d];
-      if (kern::norm2(e) > r2) return;
-      Index w = i;
-      for (int d = 0; d < kDim; ++d)  // into the period by steps: no integer division
+      double rest = 0.0;
+      for (int d = 1; d < kDim; ++d) {
+        e[d] = lo[d] + (row[d] + 0.5) * step[d] - c[d];
+        rest += e[d] * e[d];
+      }
+      const auto covered = [&](long i0) {
+        e[0] = lo[0] + (i0 + 0.5) * step[0] - c[0];
+        return kern::norm2(e) <= r2;
+      };
+      const double half = std::sqrt(std::max(0.0, r2 - rest));  // the chord's half length [m]
+      long a = std::max(first[0], static_cast<long>(std::ceil((c[0] - half - lo[0]) * inv0 - 0.5)) - 1);
+      long b = std::min(last[0], static_cast<long>(std::floor((c[0] + half - lo[0]) * inv0 - 0.5)) + 1);
+      while (a <= b && !covered(a)) ++a;
+      while (b >= a && !covered(b)) --b;
+      if (a > b) return;
+      Index w = row;  // the row's first pixel, into the period by steps: no integer division
+      w[0] = a;
+      for (int d = 0; d < kDim; ++d)
         if (wrap[d]) {
           while (w[d] < 0) w[d] += n[d];
           while (w[d] >= n[d]) w[d] -= n[d];
         }
-      std::atomic_ref<std::uint8_t>(img[linear_index(w, n)]).store(1, std::memory_order_relaxed);
+      std::uint8_t* line = img + (linear_index(w, n) - w[0]);
+      for (long i = a, x = w[0]; i <= b; ++i) {
+        std::atomic_ref<std::uint8_t>(line[x]).store(1, std::memory_order_relaxed);
+        if (++x == n[0]) x = 0;  // a run longer than the row only where axis 0 wraps
+      }
     });
   }
 }
 
-// Floods the outside (2) from the border: both ends of every axis that does not wrap.
+// Floods the outside (2) from the border, both ends of every axis that does not wrap: every void
+// pixel (0) connected to it through faces. Run by run along axis 0: a pixel taken from the stack
+// marks the run of void pixels along axis 0 that holds it, and pushes one pixel of each run of
+// void pixels beside that run (a step along another axis). The outside does not depend on the
+// order in which it is found, so the image is that of a flood pixel by pixel.
 void flood_outside(Raster& R) {
+  const Index n = R.n;
+  std::uint8_t* img = R.img.data();
   std::vector<long> stack;
   auto seed = [&](const Index& i) {
-    const long k = linear_index(i, R.n);
-    std::uint8_t& v = R.img[static_cast<std::size_t>(k)];
-    if (v == 0) {
-      v = 2;
-      stack.push_back(k);
-    }
+    const long k = linear_index(i, n);
+    if (img[k] == 0) stack.push_back(k);
   };
   const Index last = R.last();
   for (int d = 0; d < kDim; ++d) {
@@ -247,32 +274,60 @@ void flood_outside(Raster& R) {
     first[d] = last[d];
     for_each_index(first, last, seed);
   }
+  const long n0 = n[0];
+  const bool wrap0 = R.wrap[0];
   while (!stack.empty()) {
-    long k = stack.back();
+    const long k = stack.back();
     stack.pop_back();
+    if (img[k] != 0) continue;  // marked since it was pushed
     Index i;
+    long q = k;
     for (int d = 0; d < kDim; ++d) {
-      i[d] = k % R.n[d];
-      k /= R.n[d];
+      i[d] = q % n[d];
+      q /= n[d];
     }
-    for (int d = 0; d < kDim; ++d) {
-      Index j = i;
-      if (R.wrap[d]) {
-        j[d] = (i[d] + 1) % R.n[d];
-        seed(j);
-        j[d] = (i[d] + R.n[d] - 1) % R.n[d];
-        seed(j);
-        continue;
+    const long base = k - i[0];  // the row's pixel 0
+    // the run: from its first pixel s (unwrapped, s <= i[0]) over len pixels
+    long s = i[0], len = 1;
+    img[k] = 2;
+    for (long x = i[0] - 1; len < n0; --x, ++len) {
+      if (x < 0) {
+        if (!wrap0) break;
+        x += n0;
       }
-      if (i[d] > 0) {
-        j[d] = i[d] - 1;
-        seed(j);
-      }
-      if (i[d] < last[d]) {
-        j[d] = i[d] + 1;
-        seed(j);
-      }
+      if (img[base + x] != 0) break;
+      img[base + x] = 2;
+      --s;
     }
+    for (long x = i[0] + 1; len < n0; ++x, ++len) {
+      if (x >= n0) {
+        if (!wrap0) break;
+        x -= n0;
+      }
+      if (img[base + x] != 0) break;
+      img[base + x] = 2;
+    }
+    // the runs beside it, one step along each other axis
+    for (int d = 1; d < kDim; ++d)
+      for (int dir = -1; dir <= 1; dir += 2) {
+        Index j = i;
+        j[d] += dir;
+        if (j[d] < 0 || j[d] >= n[d]) {
+          if (!R.wrap[d]) continue;
+          j[d] = j[d] < 0 ? n[d] - 1 : 0;
+        }
+        j[0] = 0;
+        const long nb = linear_index(j, n);  // that row's pixel 0
+        bool in_run = false;
+        long x = s;
+        while (x < 0) x += n0;
+        for (long t = 0; t < len; ++t) {
+          const bool open = img[nb + x] == 0;
+          if (open && !in_run) stack.push_back(nb + x);
+          in_run = open;
+          if (++x == n0) x = 0;
+        }
+      }
   }
 }
 

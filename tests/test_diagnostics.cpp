@@ -147,6 +147,46 @@ TEST_CASE("open porosity: a hot fractured point holds its zero-pressure volume, 
   CHECK(hot[0].open == Approx(1.0 - (1.2e-12 + 1e-12 + 1.01e-12) / 1e-11));
 }
 
+// A square lattice of points (spacing s, periodic along x over 40 s, 30 s high) with a slot of
+// 10 x 2 points taken out: in the middle, across the periodic seam, and across the seam with a
+// channel 2 points wide from the slot to the free top on the other side of the seam. The slot
+// across the seam is the middle one moved by 20 spacings (60 pixels): the same image, so the
+// same open area; the neighbours' disks (0.75 s) reach 0.25 s into the slot on each side, so its
+// open area lies between 9.5 x 1.5 s^2 and the slot's 10 x 2 s^2 (15.8 s^2). Through the channel the slot is outside the body, however the
+// flood has to cross the seam: no open area.
+TEST_CASE("open area: a slot across the periodic seam, closed and open to the free top", "[diagnostics]") {
+  const double s = 1e-6, W = 40 * s;
+  const auto lattice = [&](auto removed) {
+    Particles P;
+    for (int j = 0; j < 30; ++j)
+      for (int i = 0; i < 40; ++i) {
+        if (removed(i, j)) continue;
+        const std::size_t k = P.size();
+        P.resize(k + 1);
+        P.x[0][k] = (i + 0.5) * s;
+        P.x[1][k] = (j + 0.5) * s;
+        P.V[k] = s * s;
+        P.body[k] = 0;
+      }
+    return P;
+  };
+  const auto area = [&](const Particles& P) {
+    const std::vector<Window> all{Window{{0.0, -1e300}, {W, 1e300}}};
+    return open_area(P, 0, all, s / 3, kCoverRadius, Vector{W, 0.0}, Vector{0.0, 0.0})[0];
+  };
+  const auto in_slot = [](int i, int j, int i0) { return (j == 14 || j == 15) && (i - i0 + 40) % 40 < 10; };
+  const double middle = area(lattice([&](int i, int j) { return in_slot(i, j, 15); }));
+  const double seam = area(lattice([&](int i, int j) { return in_slot(i, j, 35); }));
+  const double open = area(lattice([&](int i, int j) { return in_slot(i, j, 35) || (j >= 16 && (i == 2 || i == 3)); }));
+  const double none = area(lattice([](int, int) { return false; }));
+  WARN("open area [s^2]: middle " << middle / (s * s) << ", across the seam " << seam / (s * s) << ", with the channel " << open / (s * s));
+  CHECK(none == 0.0);
+  CHECK(middle > 9.5 * 1.5 * s * s);  // the scallops between the disks are open too
+  CHECK(middle < 10 * 2 * s * s);
+  CHECK(seam == Approx(middle).epsilon(1e-12));
+  CHECK(open == 0.0);
+}
+
 TEST_CASE("front detection on a synthetic profile", "[diagnostics]") {
   // a body moving at -1000 m/s, stopped below y = 412.5 um (rows of 5 um): the half-jump level is
   // crossed between the last stopped row centre and the first moving one
