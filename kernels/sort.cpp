@@ -21,6 +21,33 @@ std::pair<std::uint32_t, std::uint32_t> key_range(const std::uint32_t* key, std:
   return {kmin, kmax};
 }
 
+// The counting sort's passes over a thread's points, run by run of equal keys: nearly sorted,
+// the points of a cell come one after another (4 in a row at 2 x 2 points per cell), and
+// incrementing the histogram entry point by point made each add wait for the one before
+// through memory. count_runs adds each run's length to h[key]; place_runs writes the run's
+// points at the cursor h[key] onward and advances it, as the point-by-point loops did.
+void count_runs(const std::uint32_t* key, std::size_t i0, std::size_t i1, std::uint32_t* h) {
+  std::size_t i = i0;
+  while (i < i1) {
+    const std::uint32_t k = key[i];
+    std::size_t j = i + 1;
+    while (j < i1 && key[j] == k) ++j;
+    h[k] += static_cast<std::uint32_t>(j - i);
+    i = j;
+  }
+}
+void place_runs(const std::uint32_t* key, std::size_t i0, std::size_t i1, std::uint32_t* h, std::uint32_t* order) {
+  std::size_t i = i0;
+  while (i < i1) {
+    const std::uint32_t k = key[i];
+    std::uint32_t c = h[k];
+    std::size_t j = i;
+    for (; j < i1 && key[j] == k; ++j) order[c++] = static_cast<std::uint32_t>(j);
+    h[k] = c;
+    i = j;
+  }
+}
+
 // Thread t's block [k0, k1) of the nkeys keys for the passes over keys: an equal share of their
 // work, one unit per key and one more per thread whose histogram range [lo[u], hi[u]) holds it
 // (an equal count of keys left the thread whose block held the points' keys waiting at the
@@ -94,18 +121,16 @@ std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::si
     hi[t] = i1 > i0 ? kmax + std::size_t{1} : 0;
     std::uint32_t* h = hist + static_cast<std::size_t>(t) * nkeys;
     std::fill(h + lo[t], h + hi[t], 0u);
-    for (std::size_t i = i0; i < i1; ++i) ++h[key[i]];
+    count_runs(key, i0, i1, h);
     if (first_bad == static_cast<std::ptrdiff_t>(n)) {  // read after the keys' barrier: all agree
 #pragma omp barrier
       const auto [k0, k1] = key_block(lo, hi, T, t, nkeys);
-      // totals per key for this thread's key block
+      // the points of this thread's key block
       std::uint32_t block = 0;
-      for (std::size_t k = k0; k < k1; ++k) cell_start[k] = 0;
       for (int u = 0; u < T; ++u) {
         const std::uint32_t* hu = hist + static_cast<std::size_t>(u) * nkeys;
-        for (std::size_t k = std::max(k0, lo[u]); k < std::min(k1, hi[u]); ++k) cell_start[k] += hu[k];
+        for (std::size_t k = std::max(k0, lo[u]); k < std::min(k1, hi[u]); ++k) block += hu[k];
       }
-      for (std::size_t k = k0; k < k1; ++k) block += cell_start[k];
       block_total[t] = block;
 #pragma omp barrier
       std::uint32_t base = 0;  // exclusive scan of the block totals
@@ -117,23 +142,49 @@ std::ptrdiff_t sort_by_cell(const GridGeom& g, const double* const* pos, std::si
       int nmeet = 0;
       for (int u = 0; u < T; ++u)
         if (lo[u] < k1 && hi[u] > k0) meets[nmeet++] = u;
-      // turn counts into start offsets, and per-thread histograms into per-thread write cursors
-      for (std::size_t k = k0; k < k1; ++k) {
-        const std::uint32_t c = cell_start[k];
-        cell_start[k] = base;
-        std::uint32_t off = base;
+      // turn counts into start offsets, and per-thread histograms into per-thread write cursors:
+      // cell_start[k] the points of keys below k, thread u's cursor that plus the points of key
+      // k of the threads before u. Segment by segment between the ranges' ends, each with a fixed
+      // set of threads whose range holds it: none (most keys of a sparse grid) or one (most
+      // others, nearly sorted points) take a loop of their own.
+      std::size_t a = k0;
+      while (a < k1) {
+        std::size_t b = k1;
+        int held[kMaxThreads];
+        int nheld = 0;
         for (int j = 0; j < nmeet; ++j) {
           const int u = meets[j];
-          if (k < lo[u] || k >= hi[u]) continue;
-          std::uint32_t& hu = hist[static_cast<std::size_t>(u) * nkeys + k];
-          const std::uint32_t cu = hu;
-          hu = off;
-          off += cu;
+          if (lo[u] > a) b = std::min(b, lo[u]);
+          else if (hi[u] > a) {
+            b = std::min(b, hi[u]);
+            held[nheld++] = u;
+          }
         }
-        base += c;
+        if (nheld == 0) {
+          std::fill(cell_start + a, cell_start + b, base);
+        } else if (nheld == 1) {
+          std::uint32_t* hu = hist + static_cast<std::size_t>(held[0]) * nkeys;
+          for (std::size_t k = a; k < b; ++k) {
+            const std::uint32_t c = hu[k];
+            cell_start[k] = base;
+            hu[k] = base;
+            base += c;
+          }
+        } else {
+          for (std::size_t k = a; k < b; ++k) {
+            cell_start[k] = base;
+            for (int j = 0; j < nheld; ++j) {
+              std::uint32_t& hu = hist[static_cast<std::size_t>(held[j]) * nkeys + k];
+              const std::uint32_t cu = hu;
+              hu = base;
+              base += cu;
+            }
+          }
+        }
+        a = b;
       }
 #pragma omp barrier
-      for (std::size_t i = i0; i < i1; ++i) order[h[key[i]]++] = static_cast<std::uint32_t>(i);
+      place_runs(key, i0, i1, h, order);
       if (t == T - 1) cell_start[nkeys] = static_cast<std::uint32_t>(n);
     }
   }
