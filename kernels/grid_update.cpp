@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace SMPM_NS::kern {
 
@@ -27,6 +29,20 @@ inline void constrain(const GridGeom& g, const Walls& W, const Idx<kDim>& i, dou
     }
   }
 }
+
+// The nodes of the line through node i that no wall constrains (constrain leaves them as they
+// are): [a, e) along axis 0; empty when a wall of another axis holds the whole line.
+std::pair<int, int> off_walls(const GridGeom& g, const Walls& W, const Idx<kDim>& i) {
+  for (int d = 1; d < kDim; ++d)
+    if (!g.periodic(d) && ((W.lo[d] != Wall::None && i[d] <= 0) || (W.hi[d] != Wall::None && i[d] >= g.cells(d))))
+      return {0, 0};
+  const bool walls = !g.periodic(0);
+  return {walls && W.lo[0] != Wall::None ? 1 : std::numeric_limits<int>::min(),
+          walls && W.hi[0] != Wall::None ? g.cells(0) : std::numeric_limits<int>::max()};
+}
+
+// Nodes of a line at a time in the vectorized runs off the walls
+constexpr int kRunChunk = 64;
 
 }  // namespace
 
@@ -72,6 +88,56 @@ void grid_update(const GridGeom& g, const NodeBox& box, const GridView& G, const
           if (q.flip) G.dv[d][n] = v[d] - u[d];
         }
       },
+      [&](const Idx<kDim>& i) { return off_walls(g, q.walls, i); },
+      [&](Row& row, std::size_t n0, int count) {
+        // node() with the walls doing nothing: the same operations, so the same bits, selecting
+        // instead of returning early; the walls' reactions gain m 0 / dt = 0, and the kinetic
+        // energy they removed, round-off here, is summed in node order. Local pointers and
+        // flags: read through G and q inside the loop, GCC does not vectorize it.
+        const double dt = q.dt, eps = q.mass_eps;
+        const bool flip = q.flip, sv = q.scatter_velocity;
+        for (int c0 = 0; c0 < count; c0 += kRunChunk) {
+          const int len = std::min(kRunChunk, count - c0);
+          const std::size_t k0 = n0 + c0;
+          const double* __restrict m = G.m + k0;
+          const double* __restrict f[kDim];
+          double *__restrict p[kDim], *__restrict v[kDim], *__restrict dv[kDim];  // p: read, and written with sv
+          double gravity[kDim];
+          for (int d = 0; d < kDim; ++d) {
+            p[d] = G.p[d] + k0;
+            f[d] = G.f[d] + k0;
+            v[d] = G.v[d] + k0;
+            dv[d] = flip ? G.dv[d] + k0 : nullptr;  // null without FLIP
+            gravity[d] = q.gravity[d];
+          }
+          double lost[kRunChunk];
+#pragma omp simd
+          for (int c = 0; c < len; ++c) {
+            const double mc = m[c];
+            const bool has = !(mc <= 0.0);
+            const double inv_m = 1.0 / (has ? mc : 1.0);
+            const double acc = mc > eps ? dt : 0.0;
+            double u[kDim], w[kDim];
+#pragma GCC unroll 3
+            for (int d = 0; d < kDim; ++d) u[d] = p[d][c] * inv_m;
+#pragma GCC unroll 3
+            for (int d = 0; d < kDim; ++d) w[d] = u[d] + acc * (f[d][c] * inv_m + gravity[d]);
+            double l = u[0] * u[0];  // norm2(u), written out: a pointer to u keeps the loop scalar
+#pragma GCC unroll 3
+            for (int d = 1; d < kDim; ++d) l += u[d] * u[d];
+#pragma GCC unroll 3
+            for (int d = 0; d < kDim; ++d) l -= u[d] * u[d];
+            lost[c] = has ? 0.5 * mc * l : 0.0;
+#pragma GCC unroll 3
+            for (int d = 0; d < kDim; ++d) {
+              v[d][c] = has ? w[d] : 0.0;
+              if (flip) dv[d][c] = has ? w[d] - u[d] : 0.0;
+              if (sv) p[d][c] = has ? u[d] : 0.0;
+            }
+          }
+          for (int c = 0; c < len; ++c) row.rf[2 * kDim] += lost[c];
+        }
+      },
       [&](const Row& row, int line) {
         if (row_force)
           for (int k = 0; k < kRowSlots; ++k) row_force[kRowSlots * line + k] = row.rf[k];
@@ -79,16 +145,36 @@ void grid_update(const GridGeom& g, const NodeBox& box, const GridView& G, const
 }
 
 void grid_velocity_from_momentum(const GridGeom& g, const NodeBox& box, const GridView& G, const GridUpdateParams& q) {
-  for_each_node_by_line(g, real_nodes(g, box), [&](const Idx<kDim>& i, std::size_t n) {
-    const double m = G.m[n];
-    double v[kDim] = {};
-    if (m > 0.0) {
-      for (int d = 0; d < kDim; ++d) v[d] = G.p[d][n] / m;
-      double dv[2 * kDim] = {};
-      constrain(g, q.walls, i, v, dv);
-    }
-    for (int d = 0; d < kDim; ++d) G.v[d][n] = v[d];
-  });
+  struct None {};
+  for_each_node_by_line<None>(
+      g, real_nodes(g, box),
+      [&](None&, const Idx<kDim>& i, std::size_t n) {
+        const double m = G.m[n];
+        double v[kDim] = {};
+        if (m > 0.0) {
+          for (int d = 0; d < kDim; ++d) v[d] = G.p[d][n] / m;
+          double dv[2 * kDim] = {};
+          constrain(g, q.walls, i, v, dv);
+        }
+        for (int d = 0; d < kDim; ++d) G.v[d][n] = v[d];
+      },
+      [&](const Idx<kDim>& i) { return off_walls(g, q.walls, i); },
+      [&](None&, std::size_t n0, int count) {  // node() with the walls doing nothing
+        const double* __restrict m = G.m + n0;
+        const double* __restrict p[kDim];
+        double* __restrict v[kDim];
+        for (int d = 0; d < kDim; ++d) {
+          p[d] = G.p[d] + n0;
+          v[d] = G.v[d] + n0;
+        }
+#pragma omp simd
+        for (int c = 0; c < count; ++c) {
+          const bool has = m[c] > 0.0;
+#pragma GCC unroll 3
+          for (int d = 0; d < kDim; ++d) v[d][c] = has ? p[d][c] / (has ? m[c] : 1.0) : 0.0;
+        }
+      },
+      [](None&, int) {});
 }
 
 void clear_grid(const GridGeom& g, const NodeBox& b, const GridView& G, bool all) {

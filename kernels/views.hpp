@@ -177,17 +177,34 @@ inline NodeBox real_nodes(const GridGeom& g, const NodeBox& b) {
 // parallel for, static; a line's nodes in order on one thread): node(acc, i, n) for node i at
 // storage index n, then line_end(acc, line) with the line's storage index (GridGeom::line). acc
 // (an Acc per line, value-initialized) carries the line's sums: wall reactions, contact losses.
-template <class Acc, class Node, class LineEnd>
-inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& node, LineEnd&& line_end) {
+// With run: the nodes [a, e) of axis 0 that span(i) names for the line of node i go to
+// run(acc, n_a, e - a) together, in their place in the line's order (a loop that vectorizes
+// over nodes that need no per-node case, such as the nodes off the walls); the line's other
+// nodes to node().
+template <class Acc, class Node, class Span, class Run, class LineEnd>
+inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& node, Span&& span, Run&& run,
+                                  LineEnd&& line_end) {
   const int lines = b.lines();
 #pragma omp parallel for schedule(static)
   for (int r = 0; r < lines; ++r) {
     Idx<kDim> i = b.line_start(r);
     const int line = g.line(i);
+    const auto [a0, e0] = span(static_cast<const Idx<kDim>&>(i));
+    const int a = std::max(a0, b.lo[0]), e = std::max(a, std::min(e0, b.hi[0] + 1));
     Acc acc{};
-    for (i[0] = b.lo[0]; i[0] <= b.hi[0]; ++i[0]) node(acc, static_cast<const Idx<kDim>&>(i), g.node(i));
+    for (i[0] = b.lo[0]; i[0] < a; ++i[0]) node(acc, static_cast<const Idx<kDim>&>(i), g.node(i));
+    if (e > a) {
+      i[0] = a;
+      run(acc, g.node(i), e - a);
+    }
+    for (i[0] = e; i[0] <= b.hi[0]; ++i[0]) node(acc, static_cast<const Idx<kDim>&>(i), g.node(i));
     line_end(acc, line);
   }
+}
+template <class Acc, class Node, class LineEnd>
+inline void for_each_node_by_line(const GridGeom& g, const NodeBox& b, Node&& node, LineEnd&& line_end) {
+  for_each_node_by_line<Acc>(
+      g, b, node, [](const Idx<kDim>&) { return std::pair<int, int>{0, 0}; }, [](Acc&, std::size_t, int) {}, line_end);
 }
 // The same without per-line sums: node(i, n).
 template <class Node>
