@@ -16,6 +16,7 @@
 #include "kernels/shape.hpp"
 #include "kernels/transfer.hpp"
 #include "tests/bins.hpp"
+#include "tests/grid_update_check.hpp"
 #include "tests/merge_check.hpp"
 
 using namespace smpm;
@@ -214,4 +215,13 @@ TEST_CASE("3D merge_closed_faces: the blocks' states give each point what its no
   smpm::test::check_merge_against_nodes<kern::UGIMP>(12);
   smpm::test::check_merge_against_nodes<kern::QuadraticBSpline>(13);
   smpm::test::check_merge_against_nodes<kern::CubicBSpline>(14);
+}
+
+// tests/grid_update_check.hpp: the walls on both faces of y (x and z periodic), then on all six
+// faces
+TEST_CASE("3D grid update: vectorized runs off the walls give the node-by-node update bit for bit", "[grid]") {
+  GridGeom g = make_geom();
+  test::check_grid_update(g);
+  g.wrap[0] = g.wrap[2] = false;
+  test::check_grid_update(g);
 }

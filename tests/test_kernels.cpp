@@ -17,6 +17,7 @@
 #include "kernels/transfer.hpp"
 #include "tests/bins.hpp"
 #include "tests/gradient_arrays.hpp"
+#include "tests/grid_update_check.hpp"
 
 using namespace smpm;
 using namespace smpm::kern;
@@ -646,100 +647,16 @@ TEST_CASE("grid passes over the occupied nodes only: the same transfer, nothing 
   }
 }
 
-// The grid update and MUSL's velocity from momentum against the update written out node by node
-// (kernels/grid_update.hpp): empty nodes, nodes at or below mass_eps (no forces), every wall on
-// the four sides and the ghosts beyond them, or a periodic axis (its ghosts not updated). The
-// kernels take the nodes off the walls as vectorized runs, the others one by one; the results
-// must be those of the plain loop bit for bit: velocities, FLIP increments, the scatter
-// velocity, and the walls' reactions and removed energy summed along each line in node order.
+// tests/grid_update_check.hpp: the walls on both faces of y and, not periodic, of x; lines of
+// 150 cells too (runs of several 64-node chunks)
 TEST_CASE("grid update: vectorized runs off the walls give the node-by-node update bit for bit", "[grid]") {
-  for (bool periodic : {false, true}) {
-    INFO("periodic " << periodic);
-    const GridGeom g = make_geom(periodic);
-    Grid A(g, true);
-    std::mt19937_64 rng(11);
-    std::uniform_real_distribution<double> U(-1.0, 1.0);
-    const std::size_t nn = g.num_nodes();
-    for (std::size_t n = 0; n < nn; ++n) {
-      const int kind = static_cast<int>(n % 7);
-      A.m[n] = kind == 0 ? 0.0 : kind == 1 ? 0.01 * (1.0 + U(rng)) : 1.0 + 0.5 * U(rng);
-      for (int d = 0; d < kDim; ++d) {
-        A.p[d][n] = U(rng);
-        A.f[d][n] = 100.0 * U(rng);
-      }
+  for (bool periodic : {false, true})
+    for (int nx : {37, 150}) {
+      INFO("periodic " << periodic << ", " << nx << " cells along x");
+      GridGeom g = make_geom(periodic);
+      g.n[0] = nx;
+      test::check_grid_update(g);
     }
-    const Grid A0 = A;
-    GridUpdateParams q;
-    q.dt = 1e-3;
-    q.gravity[0] = 0.3;
-    q.gravity[1] = -9.81;
-    q.mass_eps = 0.02;  // the nodes of kind 1 below it
-    q.walls = Walls{{Wall::NoSlip, Wall::Slip}, {Wall::Slip, Wall::NoSlip}};
-    q.flip = true;
-    q.scatter_velocity = true;
-    std::vector<double> rf(kRowSlots * static_cast<std::size_t>(g.num_lines()), 7.0);
-    grid_update(g, g.all_nodes(), A.view(), q, rf.data());
-    const double inv_dt = 1.0 / q.dt;
-    for (int j = g.first_real(1); j <= g.last_real(1); ++j) {
-      double row[kRowSlots] = {};
-      for (int i = g.first_real(0); i <= g.last_real(0); ++i) {
-        const Idx<kDim> ij{{i, j}};
-        const std::size_t n = g.node(ij);
-        const double m = A0.m[n];
-        double u[kDim] = {}, v[kDim] = {}, du[kDim] = {};
-        if (m > 0.0) {
-          const double inv_m = 1.0 / m, acc = m > q.mass_eps ? q.dt : 0.0;
-          for (int d = 0; d < kDim; ++d) u[d] = A0.p[d][n] * inv_m;
-          for (int d = 0; d < kDim; ++d) v[d] = u[d] + acc * (A0.f[d][n] * inv_m + q.gravity[d]);
-          const double u2 = u[0] * u[0] + u[1] * u[1];
-          double dv[2 * kDim] = {};
-          // the walls in order (axis, low then high), on u for the removed energy, then on v
-          for (double* w : {u, v})
-            for (int d = 0; d < kDim; ++d)
-              for (int s = 0; s < 2 && !g.periodic(d); ++s) {
-                const Wall wall = s ? q.walls.hi[d] : q.walls.lo[d];
-                if (wall == Wall::None || (s ? ij[d] < g.n[d] : ij[d] > 0)) continue;
-                const double before = w[d];
-                for (int e = 0; e < kDim; ++e)
-                  if (e == d || wall == Wall::NoSlip) w[e] = 0.0;
-                if (w == v) dv[2 * d + s] += w[d] - before;
-              }
-          double lost = u2;
-          for (int d = 0; d < kDim; ++d) lost -= u[d] * u[d];
-          row[2 * kDim] += 0.5 * m * lost;
-          for (int k = 0; k < 2 * kDim; ++k) row[k] += m * dv[k] * inv_dt;
-          for (int d = 0; d < kDim; ++d) du[d] = v[d] - u[d];
-        }
-        for (int d = 0; d < kDim; ++d) {
-          INFO("node " << i << ", " << j << ", axis " << d);
-          REQUIRE(A.v[d][n] == v[d]);
-          REQUIRE(A.dv[d][n] == du[d]);
-          REQUIRE(A.p[d][n] == u[d]);
-        }
-      }
-      const int line = g.line(Idx<kDim>{{0, j}});
-      for (int k = 0; k < kRowSlots; ++k) REQUIRE(rf[kRowSlots * line + k] == row[k]);
-    }
-    // MUSL's velocity from momentum: v = p / m with the walls, 0 on empty nodes
-    Grid B = A0;
-    grid_velocity_from_momentum(g, g.all_nodes(), B.view(), q);
-    for (int j = g.first_real(1); j <= g.last_real(1); ++j)
-      for (int i = g.first_real(0); i <= g.last_real(0); ++i) {
-        const Idx<kDim> ij{{i, j}};
-        const std::size_t n = g.node(ij);
-        double v[kDim] = {};
-        if (A0.m[n] > 0.0)
-          for (int d = 0; d < kDim; ++d) v[d] = A0.p[d][n] / A0.m[n];
-        for (int d = 0; d < kDim; ++d)
-          for (int s = 0; s < 2 && !g.periodic(d); ++s) {
-            const Wall wall = s ? q.walls.hi[d] : q.walls.lo[d];
-            if (wall == Wall::None || (s ? ij[d] < g.n[d] : ij[d] > 0)) continue;
-            for (int e = 0; e < kDim; ++e)
-              if (e == d || wall == Wall::NoSlip) v[e] = 0.0;
-          }
-        for (int d = 0; d < kDim; ++d) REQUIRE(B.v[d][n] == v[d]);
-      }
-  }
 }
 
 TEST_CASE("pure FLIP velocity pass (flip_alpha = 1) gives the blend's velocities without the PIC sum",
