@@ -469,8 +469,22 @@ inline NodeBox occupied_nodes(const GridGeom& g, const std::uint32_t* cell_start
   return b;
 }
 
+// The block index of the first stencil node of the tile's cell j (cells numbered x fastest; the
+// tile's first cell is the block's node lo + 1 on every axis), for a shape whose stencil is its
+// cell's.
+template <class Shape, int K>
+SMPM_INLINE std::size_t cell_first_node(const GridGeom& g, const TileSink<K>& sink, int j) {
+  Idx<kDim> first;
+  for (int d = 0; d < kDim; ++d) {
+    first[d] = sink.lo[d] + 1 + j % g.tile + Shape::cell_first;
+    j /= g.tile;
+  }
+  return sink.node(first);
+}
+
 // MUSL's one-field momentum remap of one tile's points for a shape whose stencil is its cell's
-// (Shape::cell_stencil): the points of a cell, sorted together, share their N^kDim nodes, so
+// (Shape::cell_stencil) of more than 2 x 2 nodes (the cubic B-spline; the linear hat's goes by
+// p2g_cell_vectors): the points of a cell, sorted together, share their N^kDim nodes, so
 // their contributions are summed in registers (CellSink) and added to the tile's block once per
 // cell. Point by point, consecutive points of a cell would add to the same block values through
 // memory, each add waiting for the one before. A node's value is its cells' sums added in cell
@@ -487,13 +501,7 @@ inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const Particle
     const CellSink<K, N> cell{{acc}};
     for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s)
       p2g_particle<Shape, APIC, P2GWhat::Momentum>(g, cell, P, order[s], lp);
-    Idx<kDim> first;
-    int rest = j;
-    for (int d = 0; d < kDim; ++d) {
-      first[d] = sink.lo[d] + 1 + rest % g.tile + Shape::cell_first;
-      rest /= g.tile;
-    }
-    const std::size_t n0 = sink.node(first);
+    const std::size_t n0 = cell_first_node<Shape>(g, sink, j);
 #pragma GCC unroll 64
     for (int k = 0; k < Nodes; ++k) {
       double* const v = sink.s + K * node_index(sink, n0, Stencil<Shape, kDim>::digits(k));
@@ -504,14 +512,82 @@ inline void p2g_cells(const GridGeom& g, const TileSink<K>& sink, const Particle
   }
 }
 
+// The one-field scatter of one tile's points (mass, momentum and force, or MUSL's momentum alone)
+// for a 2D shape whose stencil is its cell's 2 x 2 nodes (the linear hat): each value of the
+// cell's nodes (Slot) is one vector over its four nodes (Line, node k = a_0 + 2 a_1), summed
+// over the cell's points in registers and added to the tile's block once per cell. Point by
+// point (p2g_particle) the full scatter makes 20 scalar adds through the block and about 40
+// scalar products per point. Each point's node terms take p2g_particle's operations in its
+// order, lane by lane (w = w_0 w_1, g = (dw_0 w_1, w_0 dw_1), q_r = w (m v_r [+ m C_r . (x_i -
+// x_p)]), f_r = vs_r0 g_0 + vs_r1 g_1); only the grouping of the sums differs from the point by
+// point scatter (a cell's points first, then the cell into the block): the momentum alone is
+// p2g_cells' bit for bit. cs: the tile's cpt + 1 cell starts; the tile's first cell is the
+// block's node lo + 1 on every axis.
+template <class Shape, bool APIC, P2GWhat What, int K>
+inline void p2g_cell_vectors(const GridGeom& g, const TileSink<K>& sink, const ParticleView& P,
+                             const std::uint32_t* order, const std::uint32_t* cs, double lp) {
+  static_assert(kDim == 2 && Shape::N == 2 && Shape::cell_stencil, "a cell's stencil of 2 x 2 nodes");
+  const int cpt = g.cells_per_tile();
+  const double inv_h = 1.0 / g.h, h = g.h;
+  const double o0 = g.origin(0), o1 = g.origin(1);
+  const double* const pq_q = P.q;
+  for (int j = 0; j < cpt; ++j) {
+    if (cs[j] == cs[j + 1]) continue;
+    Line M = {}, Q0 = {}, Q1 = {}, F0 = {}, F1 = {};
+    for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s) {
+      const std::uint32_t p = order[s];
+      const Stencil<Shape, 2> st(Vec<2>{{(P.x[0][p] - o0) * inv_h, (P.x[1][p] - o1) * inv_h}}, lp);
+      const double m = P.m[p];
+      const double mv0 = m * P.v[0][p], mv1 = m * P.v[1][p];
+      const Line wx = {st.w[0][0], st.w[0][1], st.w[0][0], st.w[0][1]};
+      const Line wy = {st.w[1][0], st.w[1][0], st.w[1][1], st.w[1][1]};
+      const Line dx = {st.dw[0][0], st.dw[0][1], st.dw[0][0], st.dw[0][1]};
+      const Line dy = {st.dw[1][0], st.dw[1][0], st.dw[1][1], st.dw[1][1]};
+      const Line w = wx * wy, g0 = dx * wy, g1 = wx * dy;
+      Line q0 = Line{mv0, mv0, mv0, mv0}, q1 = Line{mv1, mv1, mv1, mv1};
+      if constexpr (APIC) {  // grid-unit offsets: h folded into m C
+        const Line x0 = Line{double(st.base[0]), double(st.base[0] + 1), double(st.base[0]), double(st.base[0] + 1)} - st.xg[0];
+        const Line x1 = Line{double(st.base[1]), double(st.base[1]), double(st.base[1] + 1), double(st.base[1] + 1)} - st.xg[1];
+        q0 = q0 + ((m * P.affine(0, 0)[p] * h) * x0 + (m * P.affine(0, 1)[p] * h) * x1);
+        q1 = q1 + ((m * P.affine(1, 0)[p] * h) * x0 + (m * P.affine(1, 1)[p] * h) * x1);
+      }
+      Q0 += w * q0;
+      Q1 += w * q1;
+      if constexpr (What == P2GWhat::All) {
+        const double Vh = P.V[p] * inv_h;
+        const double pq = pq_q ? P.p[p] + pq_q[p] : P.p[p];
+        const double vs00 = -Vh * (P.s[0][p] - pq), vs11 = -Vh * (P.s[1][p] - pq), vs01 = -Vh * P.s[2][p];
+        M += w * m;
+        F0 += vs00 * g0 + vs01 * g1;
+        F1 += vs01 * g0 + vs11 * g1;
+      }
+    }
+    const std::size_t n0 = cell_first_node<Shape>(g, sink, j);
+#pragma GCC unroll 4
+    for (int k = 0; k < 4; ++k) {
+      double* const v = sink.s + K * node_index(sink, n0, Stencil<Shape, kDim>::digits(k));
+      v[Slot::momentum] += Q0[k];
+      v[Slot::momentum + 1] += Q1[k];
+      if constexpr (What == P2GWhat::All) {
+        v[Slot::mass] += M[k];
+        v[Slot::force] += F0[k];
+        v[Slot::force + 1] += F1[k];
+      }
+    }
+  }
+}
+
 // Colored scatter of mass, momentum and internal force (or momentum only); with Contact into
 // G.fields velocity fields (two bodies: two, with mass gradients; void faces: two or four, with
-// volumes). MUSL's one-field momentum scatter of a shape whose stencil is its cell's goes cell by
-// cell (p2g_cells; the full scatter summed per cell measured slower: docs/performance.md).
+// volumes). A one-field scatter of a shape whose stencil is its cell's goes cell by cell: the
+// linear hat's with a cell's node values as vectors (p2g_cell_vectors), the cubic B-spline's
+// MUSL momentum as scalar sums (p2g_cells; a full scatter summed that way, twenty scalar sums
+// per cell, measured slower: docs/performance.md).
 template <class Shape, bool APIC, P2GWhat What, bool Contact = false, bool Normals = true>
 void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, const std::uint32_t* order,
                  const std::uint32_t* cell_start, double lp) {
-  constexpr bool kCells = Shape::cell_stencil && !Contact && kDim == 2 && What == P2GWhat::Momentum;
+  constexpr bool kCellVectors = Shape::cell_stencil && Shape::N == 2 && !Contact && kDim == 2;
+  constexpr bool kCells = Shape::cell_stencil && !Contact && kDim == 2 && What == P2GWhat::Momentum && !kCellVectors;
   // 3D: whole vectors of 8 values per node (scatter_slots), one cache line for 7 or 8 values
   constexpr int K0 = Slot::count(Contact, Normals), K = kDim == 3 ? (K0 + 7) / 8 * 8 : K0;
   constexpr int FMax = Contact ? (Normals ? 2 : 4) : 1;
@@ -522,6 +598,8 @@ void p2g_colored(const GridGeom& g, const GridView& G, const ParticleView& P, co
         const TileSink<K> sink{{b.s}, b.lo, b.span};
         if constexpr (kCells) {
           p2g_cells<Shape, APIC, K>(g, sink, P, order, cell_start + b.tile * g.cells_per_tile(), lp);
+        } else if constexpr (kCellVectors) {
+          p2g_cell_vectors<Shape, APIC, What, K>(g, sink, P, order, cell_start + b.tile * g.cells_per_tile(), lp);
         } else {
           p2g_range<Shape, APIC, What, TileSink<K>, Contact, Normals>(g, sink, P, order, s0, s1, lp);
         }

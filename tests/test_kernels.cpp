@@ -430,11 +430,12 @@ TEST_CASE("colored scatter is bitwise identical for 1 and 2 threads", "[transfer
   omp_set_num_threads(threads0);
 }
 
-// MUSL's momentum scatter for a shape whose stencil is its cell's (linear, cubic) sums each
-// cell's points in registers and adds the sum to the tile's block once (kern::p2g_cells): the
-// same momentum as a serial scatter point by point to rounding, mass and force untouched, and
-// the same bits on any thread count.
-template <class S, bool APIC>
+// The one-field scatters that sum a cell's points before adding to the tile's block: MUSL's
+// momentum scatter for a shape whose stencil is its cell's (linear, cubic; kern::p2g_cells) and
+// the full scatter of the linear hat (mass, momentum, force as vectors over the cell's four
+// nodes; kern::p2g_cell_vectors). The same values as a serial scatter point by point to rounding,
+// the values a momentum scatter does not form untouched, and the same bits on any thread count.
+template <class S, bool APIC, P2GWhat What>
 void check_cell_scatter() {
   const GridGeom g = make_geom(true);
   Particles P = random_particles(g, 30000, 21);
@@ -445,33 +446,43 @@ void check_cell_scatter() {
   const int threads0 = omp_get_max_threads();
   omp_set_num_threads(1);
   clear_grid(g, g.all_nodes(), A, true);
-  p2g_colored<S, APIC, P2GWhat::Momentum>(g, A, pv, b.order.data(), b.start.data(), 0.25);
+  p2g_colored<S, APIC, What>(g, A, pv, b.order.data(), b.start.data(), 0.25);
   clear_grid(g, g.all_nodes(), Sg, true);
-  p2g_serial<S, APIC, P2GWhat::Momentum>(g, Sg, pv, b.order.data(), P.size(), 0.25);
-  double worst = 0;
-  for (int d = 0; d < kDim; ++d) {
-    double scale = 0;
-    for (double v : s.p[d]) scale = std::max(scale, std::fabs(v));
+  p2g_serial<S, APIC, What>(g, Sg, pv, b.order.data(), P.size(), 0.25);
+  const auto worst = [](const std::vector<double>& x, const std::vector<double>& ref) {
+    double scale = 0, w = 0;
+    for (double v : ref) scale = std::max(scale, std::fabs(v));
     REQUIRE(scale > 0);
-    for (std::size_t n = 0; n < a.p[d].size(); ++n) worst = std::max(worst, std::fabs(a.p[d][n] - s.p[d][n]) / scale);
+    for (std::size_t n = 0; n < x.size(); ++n) w = std::max(w, std::fabs(x[n] - ref[n]) / scale);
+    return w;
+  };
+  for (int d = 0; d < kDim; ++d) CHECK(worst(a.p[d], s.p[d]) < 1e-13);
+  if constexpr (What == P2GWhat::All) {
+    CHECK(worst(a.m, s.m) < 1e-13);
+    for (int d = 0; d < kDim; ++d) CHECK(worst(a.f[d], s.f[d]) < 1e-13);
+  } else {
+    CHECK(std::all_of(a.m.begin(), a.m.end(), [](double v) { return v == 0.0; }));
+    CHECK(std::all_of(a.f[0].begin(), a.f[0].end(), [](double v) { return v == 0.0; }));
   }
-  CHECK(worst < 1e-13);
-  CHECK(std::all_of(a.m.begin(), a.m.end(), [](double v) { return v == 0.0; }));
-  CHECK(std::all_of(a.f[0].begin(), a.f[0].end(), [](double v) { return v == 0.0; }));
   for (int t : {2, 3, 5}) {
     omp_set_num_threads(t);
     clear_grid(g, g.all_nodes(), C, true);
-    p2g_colored<S, APIC, P2GWhat::Momentum>(g, C, pv, b.order.data(), b.start.data(), 0.25);
+    p2g_colored<S, APIC, What>(g, C, pv, b.order.data(), b.start.data(), 0.25);
     REQUIRE(a.p[0] == c.p[0]);
     REQUIRE(a.p[1] == c.p[1]);
+    REQUIRE(a.m == c.m);
+    REQUIRE(a.f[0] == c.f[0]);
+    REQUIRE(a.f[1] == c.f[1]);
   }
   omp_set_num_threads(threads0);
 }
 
-TEST_CASE("per-cell momentum scatter (linear, cubic) matches a serial scatter, any thread count", "[transfer]") {
-  check_cell_scatter<Linear, false>();
-  check_cell_scatter<Linear, true>();
-  check_cell_scatter<CubicBSpline, true>();
+TEST_CASE("per-cell scatters (linear, cubic) match a serial scatter, any thread count", "[transfer]") {
+  check_cell_scatter<Linear, false, P2GWhat::Momentum>();
+  check_cell_scatter<Linear, true, P2GWhat::Momentum>();
+  check_cell_scatter<CubicBSpline, true, P2GWhat::Momentum>();
+  check_cell_scatter<Linear, false, P2GWhat::All>();
+  check_cell_scatter<Linear, true, P2GWhat::All>();
 }
 
 TEST_CASE("thread shares by weight: contiguous, in thread order, every item once, balanced", "[transfer]") {
