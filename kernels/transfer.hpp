@@ -529,14 +529,13 @@ inline void p2g_cell_vectors(const GridGeom& g, const TileSink<K>& sink, const P
   static_assert(kDim == 2 && Shape::N == 2 && Shape::cell_stencil, "a cell's stencil of 2 x 2 nodes");
   const int cpt = g.cells_per_tile();
   const double inv_h = 1.0 / g.h, h = g.h;
-  const double o0 = g.origin(0), o1 = g.origin(1);
   const double* const pq_q = P.q;
   for (int j = 0; j < cpt; ++j) {
     if (cs[j] == cs[j + 1]) continue;
     Line M = {}, Q0 = {}, Q1 = {}, F0 = {}, F1 = {};
     for (std::uint32_t s = cs[j]; s < cs[j + 1]; ++s) {
       const std::uint32_t p = order[s];
-      const Stencil<Shape, 2> st(Vec<2>{{(P.x[0][p] - o0) * inv_h, (P.x[1][p] - o1) * inv_h}}, lp);
+      const Stencil<Shape, 2> st(grid_units(g, P, p, inv_h), lp);
       const double m = P.m[p];
       const double mv0 = m * P.v[0][p], mv1 = m * P.v[1][p];
       const Line wx = {st.w[0][0], st.w[0][1], st.w[0][0], st.w[0][1]};
